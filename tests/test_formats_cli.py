@@ -1033,6 +1033,24 @@ def test_omezarr_levels_and_transformations_that_are_not_what_they_must_be(tmp_p
     assert not (tmp_path / "s.ply").exists()
 
 
+@pytest.mark.parametrize("scale, axis, shown", [([1.0, 2.0, -0.5], "x", "-0.5"), ([0.0, 2.0, 0.5], "z", "0")])
+def test_an_omezarr_scale_that_is_no_voxel_size_is_named_as_the_file_names_it(tmp_path, scale, axis, shown):
+    """A level whose scale is negative or 0 was refused as "'pitch' must
+    be positive ... got [-0.5, 2, 1]": isoflow's word for a field the file
+    does not have, its values turned to x, y, z. The line names the
+    level's scale, the axis and its value as the file stores them."""
+    pytest.importorskip("zarr")
+    ome_group(tmp_path / "n.zarr", [{"type": "scale", "scale": scale}], data=np.ones((3, 4, 5), np.uint8))
+    for command in (["info"], ["surface", "-o", str(tmp_path / "n.ply")], ["info", "--labels"]):
+        done = subprocess.run([sys.executable, "-m", "isoflow", command[0], str(tmp_path / "n.zarr"), *command[1:]],
+                              capture_output=True, text=True)
+        lines = done.stderr.strip().splitlines()
+        assert done.returncode == 2 and len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
+        assert (f"n.zarr: OME-Zarr level '0': the scale of axis '{axis}' is {shown} " in lines[0]
+                and "pitch" not in lines[0]), lines[0]
+    assert not (tmp_path / "n.ply").exists()
+
+
 def damaged_store(path, data, chunks=(4, 4, 4), ome=False):
     """A zarr store whose chunk 0.0.0 (0.0.0 of level 0) is garbage."""
     import zarr

@@ -74,9 +74,12 @@ CHUNK = 128
 NGFF_VERSION = "0.4"
 
 
-def placement_of(multiscale: dict, dataset: dict, ndim: int, where: str) -> tuple[np.ndarray, np.ndarray]:
+def placement_of(multiscale: dict, dataset: dict, ndim: int, where: str,
+                 xyz: list[int] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(scale, translation) per stored axis: the level's transformations,
-    then the image's."""
+    then the image's; one line naming the level's scale where that of an
+    axis of ``xyz`` (the stored indices of x, y and z) is no positive voxel
+    size (the file's field, not isoflow's word for it, ``pitch``)."""
     scale, shift = np.ones(ndim), np.zeros(ndim)
     steps = list(dataset.get("coordinateTransformations") or []) + list(
         multiscale.get("coordinateTransformations") or [])
@@ -97,6 +100,11 @@ def placement_of(multiscale: dict, dataset: dict, ndim: int, where: str) -> tupl
             scale, shift = scale * values, shift * values
         else:
             shift = shift + values
+    for name, i in zip("xyz", xyz or []):
+        if not scale[i] > 0:
+            raise IsoflowError(f"{where}: OME-Zarr level {dataset.get('path')!r}: the scale of axis {name!r} is "
+                               f"{scale[i]:g} (its coordinateTransformations, then the image's), not a positive "
+                               "voxel size")
     return scale, shift
 
 
@@ -171,8 +179,8 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
             return RawVolume(data, *(v if time is None or not v.ndim else v[:3] for v in (pitch, origin)), fill=fill,
                              unwritten=blank)
         return RawVolume(data, fill=fill, unwritten=blank)
-    scale, shift = placement_of(multiscale, level, data.ndim, where)
     xyz, _ = spatial_axes(names, data.shape, where, time=True)
+    scale, shift = placement_of(multiscale, level, data.ndim, where, xyz)
     factors, unit = axis_unit(multiscale, xyz, where)
     pitch, origin = scale[xyz[:3]] * factors, (shift[xyz[:3]] - scale[xyz[:3]] / 2) * factors
     if len(xyz) == 4:  # time keeps step 1 from 0, as a 4D NIfTI's does: a lattice axis, not seconds
@@ -325,7 +333,7 @@ class StoreArray:
             if "pitch" in attrs and "origin" in attrs:
                 return np.asarray(attrs["pitch"], np.float64), np.asarray(attrs["origin"], np.float64)
             return None, None
-        scale, shift = placement_of(self.multiscale, self.dataset, self.array.ndim, self.where)
+        scale, shift = placement_of(self.multiscale, self.dataset, self.array.ndim, self.where, self.xyz)
         factors = self.units[0]
         if len(self.xyz) == 4:  # (a time axis: its step as it is)
             factors = np.append(factors, 1.0)
