@@ -1239,6 +1239,46 @@ def _saved(path, array):
     return path
 
 
+def test_a_dataset_an_hdf5_external_link_names_is_read_and_listed(tmp_path):
+    """A file that gathers other files' volumes by external links
+    (``f["v"] = h5py.ExternalLink("scan.h5", "/v")``) was "holds no dataset",
+    though h5py reads ``f["v"]`` through the link, and the link was left
+    out of the list to choose from beside a dataset of the file's own. The
+    voxel count is h5py's read through the link; a link whose file is
+    not there is named in the refusal."""
+    h5py = pytest.importorskip("h5py")
+    volume = np.zeros((6, 7, 8), np.uint8)
+    volume[1:4, 2:5, 3:6] = 1
+    volume[4, 5, 6] = 1
+    with h5py.File(tmp_path / "scan.h5", "w") as f:
+        f["v"] = volume
+    with h5py.File(tmp_path / "links.h5", "w") as f:
+        f["v"] = h5py.ExternalLink("scan.h5", "/v")
+    with h5py.File(tmp_path / "both.h5", "w") as f:
+        f["a"] = np.ones((3, 3, 3), np.uint8)
+        f["g/ext"] = h5py.ExternalLink("scan.h5", "/v")
+    with h5py.File(tmp_path / "dangling.h5", "w") as f:
+        f["v"] = h5py.ExternalLink("gone.h5", "/v")
+    with h5py.File(tmp_path / "links.h5") as f:
+        voxels = int(np.count_nonzero(f["v"][()]))
+
+    def isoflow_cli(*args):
+        return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True,
+                              cwd=tmp_path)
+
+    done = isoflow_cli("info", "links.h5", "--json")
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["voxels"] == voxels == 28
+    done = isoflow_cli("info", "both.h5")
+    assert done.returncode == 2 and done.stderr.strip().splitlines() == [
+        "isoflow info: error: both.h5: holds datasets /a, /g/ext; name one, e.g. both.h5:/a"], done.stderr
+    done = isoflow_cli("info", "both.h5:/g/ext", "--json")
+    assert done.returncode == 0 and json.loads(done.stdout)["voxels"] == voxels, done.stderr
+    done = isoflow_cli("info", "dangling.h5")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and "gone.h5:/v" in lines[0], done.stderr
+
+
 def test_a_dataset_written_into_an_hdf5_file_keeps_its_other_datasets(tmp_path, capsys, labels):
     """``-o FILE.h5:/name`` adds a dataset to an existing file, as h5py's
     own ``File(path, "a")`` would: the other datasets, their attributes and

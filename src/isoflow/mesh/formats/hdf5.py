@@ -2,7 +2,8 @@
 
 Axes: the dataset's axes as stored (C order), axis 0 being x, as for
 ``.npy``. Without a dataset path the file must hold one dataset, or one
-named ``volume``; otherwise the error lists the datasets to choose from.
+named ``volume``; otherwise the error lists the datasets to choose from
+(a dataset an external link names among them).
 
 Metadata: isoflow writes the attributes ``pitch`` (one number, or one per
 axis), ``origin``, ``offset`` and ``parity`` on the dataset and reads them
@@ -101,8 +102,7 @@ def _element_size(value, ndim: int, where: str) -> np.ndarray:
 
 def _choose(f, h5py, path, dataset) -> str:
     """The dataset's name: the one given, or the file's only one, or 'volume'."""
-    names: list[str] = []
-    f.visititems(lambda name, node: names.append(name) if isinstance(node, h5py.Dataset) else None)
+    names, dangling = _datasets(f, h5py)
     if dataset is not None:
         if dataset not in f:
             raise IsoflowError(f"{path}: no dataset {dataset!r} (datasets: {_listed(names)})")
@@ -114,8 +114,42 @@ def _choose(f, h5py, path, dataset) -> str:
     if len(names) == 1:
         return names[0]
     if not names:
-        raise IsoflowError(f"{path}: holds no dataset")
+        broken = "".join(f"; its external link /{n} names {t}, which cannot be opened" for n, t in dangling[:3])
+        raise IsoflowError(f"{path}: holds no dataset{broken}")
     raise IsoflowError(f"{path}: holds datasets {_listed(names)}; name one, e.g. {path}:/{names[0]}")
+
+
+def _datasets(f, h5py) -> tuple[list[str], list[tuple[str, str]]]:
+    """The names of the file's datasets, those an external link names
+    (``f["v"] = h5py.ExternalLink("big.h5", "/v")``, as a file that
+    gathers others' volumes holds them) too, which HDF5's visit of the
+    file's own objects leaves out; and each external link that cannot be
+    opened, with the file and path it names."""
+    names: list[str] = []
+    groups = [("", f)]
+
+    def seen(name, node):
+        if isinstance(node, h5py.Dataset):
+            names.append(name)
+        elif isinstance(node, h5py.Group):
+            groups.append((name + "/", node))
+
+    f.visititems(seen)
+    dangling = []
+    for prefix, group in groups:
+        for key in group:
+            link = group.get(key, getlink=True)
+            if not isinstance(link, h5py.ExternalLink):
+                continue
+            try:
+                node = group.get(key)
+            except (KeyError, OSError, ValueError):
+                node = None
+            if isinstance(node, h5py.Dataset):
+                names.append(prefix + key)
+            elif node is None:
+                dangling.append((prefix + key, f"{link.filename}:{link.path}"))
+    return sorted(names), dangling
 
 
 def _listed(names: list[str]) -> str:
