@@ -1239,6 +1239,51 @@ def _saved(path, array):
     return path
 
 
+def vigra_axistags(keys: str) -> str:
+    """The ``axistags`` attribute vigra's ``AxisTags.toJSON()`` writes, as
+    ilastik puts it on its exports (typeFlags: 1 channel, 2 space, 8 time)."""
+    flags = {"c": 1, "t": 8}
+    return json.dumps({"axes": [{"key": k, "typeFlags": flags.get(k, 2), "resolution": 0, "description": ""}
+                                for k in keys]}, indent=2)
+
+
+def test_an_ilastik_export_is_read_by_its_axistags(tmp_path):
+    """ilastik exports ``exported_data`` as (z, y, x, c) with vigra's
+    ``axistags``. Its channel axis was read as a fourth spatial or time
+    axis: a Simple Segmentation (c of 1) as a 4D volume one voxel thick,
+    whose b1 and b2 are not counted, and two channels of a mask as a 4D
+    series of 336 voxels. A channel of one entry is dropped, as an
+    OME-Zarr's and a TIFF's are, and several are refused; the counts are
+    numpy's of the array h5py reads."""
+    h5py = pytest.importorskip("h5py")
+    segmentation = np.ones((8, 7, 6, 1), np.uint8)  # ilastik's labels: 1 background, 2 the object
+    segmentation[2:5, 1:4, 1:5] = 2
+    segmentation[6, 5, 4] = 2
+    with h5py.File(tmp_path / "seg.h5", "w") as f:
+        f.create_dataset("exported_data", data=segmentation).attrs["axistags"] = vigra_axistags("zyxc")
+    with h5py.File(tmp_path / "two.h5", "w") as f:
+        data = np.stack([segmentation[..., 0] == 2, segmentation[..., 0] == 1], axis=-1).astype(np.uint8)
+        f.create_dataset("exported_data", data=data).attrs["axistags"] = vigra_axistags("zyxc")
+
+    def isoflow_cli(*args):
+        return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True)
+
+    done = isoflow_cli("info", tmp_path / "seg.h5", "--label", "2", "--json")
+    assert done.returncode == 0, done.stderr
+    got = json.loads(done.stdout)
+    with h5py.File(tmp_path / "seg.h5") as f:
+        stored = f["exported_data"][()]
+    assert got["shape"] == list(stored.shape[:3]) and got["voxels"] == np.count_nonzero(stored == 2)
+    from scipy import ndimage
+
+    # a box and a voxel apart: counted in 3D (b1 and b2 of a 4D reading were not counted)
+    assert got["betti"] == [ndimage.label(stored[..., 0] == 2)[1], 0, 0] == [2, 0, 0]
+    done = isoflow_cli("info", tmp_path / "two.h5")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert "axis 'c' has 2 entries (axistags zyxc, shape (8, 7, 6, 2))" in lines[0], lines[0]
+
+
 def test_a_dataset_an_hdf5_external_link_names_is_read_and_listed(tmp_path):
     """A file that gathers other files' volumes by external links
     (``f["v"] = h5py.ExternalLink("scan.h5", "/v")``) was "holds no dataset",
