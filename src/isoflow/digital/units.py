@@ -103,7 +103,6 @@ def unit_given(unit: object, where: str) -> str | None:
     return spelled
 
 
-
 def unit_factor(unit: str, into: str) -> float:
     """How many of ``into`` one ``unit`` is, both in isoflow's spelling
     (:data:`LENGTH_UNITS`): the factor that turns a length in ``unit`` into
