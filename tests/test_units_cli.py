@@ -307,6 +307,25 @@ def test_axes_in_different_length_units_are_read_in_the_first_axis_unit(tmp_path
     assert np.isclose(mesh.volume, np.count_nonzero(cube() == 1) * np.prod(pitch))
 
 
+@pytest.mark.parametrize("labels", [["--label", "1"], ["--labels"]])
+def test_a_unit_isoflow_does_not_know_is_said_once(tmp_path, labels):
+    """An OME-Zarr store read block by block whose z is in parsec: the
+    warning that no unit is reported came twice (the store's axes are read
+    by the report and again by the placement it prints)."""
+    ome_zarr(tmp_path / "seg.zarr", "micrometer")
+    zarr = pytest.importorskip("zarr")
+    group = zarr.open_group(str(tmp_path / "seg.zarr"), mode="a")
+    multiscales = group.attrs["multiscales"]
+    multiscales[0]["axes"][0]["unit"] = "parsec"
+    group.attrs["multiscales"] = multiscales
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "seg.zarr"), "--json", *labels],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["unit"] is None
+    said = [line for line in done.stderr.splitlines() if "differ by axis" in line]
+    assert len(said) == 1, done.stderr
+
+
 def ome_zarr(path, unit: str | None, ndim: int = 3):
     """An NGFF 0.4 image written with zarr itself: (z, y, x), scale and
     translation, each spatial axis in ``unit``."""

@@ -74,7 +74,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     grid = None
     if split_dataset(args.input)[0].suffix.lower() == ".zarr" and stored_ndim(args.input) in (2, 3):
         report = info_of_store(args)
-        placed: dict | None = store_placement(args.input)
+        placed: dict | None = store_placement(args.input, report.unit)
     else:
         report, grid, placed = info_in_memory(args)
     if args.json:
@@ -103,9 +103,10 @@ def calibration(obj, unit: str | None, dtype) -> dict:
             "origin": [float(c) + 0.0 for c in corner], "unit": unit, "space": obj.space}
 
 
-def store_placement(path) -> dict:
+def store_placement(path, unit: str | None) -> dict:
     """:func:`calibration` of a zarr store read block by block, from its
-    metadata (the volume is not read)."""
+    metadata (the volume is not read); ``unit`` as the report found it
+    (read from the axes again, a warning about them would be said twice)."""
     from ..digital.lattice import DigitalObject
     from ..mesh.formats.omezarr import open_store
 
@@ -115,7 +116,7 @@ def store_placement(path) -> dict:
         place = DigitalObject.placement(len(store.xyz), pitch=pitch, origin=origin)
     except IsoflowError as exc:
         raise exc.at(path) from None
-    return calibration(place, store.unit(), store.array.dtype)
+    return calibration(place, unit, store.array.dtype)
 
 
 def info_of_store(args: argparse.Namespace) -> Report:
