@@ -380,3 +380,31 @@ def test_cli_md_says_what_the_4d_json_carries(tmp_path):
     img, got = series_json(tmp_path)
     assert not {"volume", "surface_area", "bbox", "centroid"} & set(got)
     assert got["unit"] == img.header.get_xyzt_units()[0] and len(got["pitch"]) == len(got["origin"]) == 4
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".h5"])
+@pytest.mark.parametrize("stored, unit", [(5, None), (["mm", "mm"], None), (b"mm", "mm"), ("micron", MICRO)])
+def test_a_unit_field_that_holds_no_text_is_no_unit(tmp_path, suffix, stored, unit):
+    """A ``unit`` field of a number (5) or of several strings was printed
+    as the unit ("voxel size 0.5 x 0.5 x 0.5 5", "... ['mm' 'mm']"), and
+    bytes as their repr; a field of no text is now no unit, said in one
+    warning naming the field and value, and bytes are their text."""
+    path = tmp_path / f"v{suffix}"
+    volume = (cube() == 1).astype(np.uint8)
+    if suffix == ".npz":
+        np.savez(path, volume=volume, pitch=np.array(0.5), unit=np.array(stored))
+        field = "array 'unit'"
+    else:
+        h5py = pytest.importorskip("h5py")
+        with h5py.File(path, "w") as f:
+            f.create_dataset("volume", data=volume).attrs.update({"pitch": 0.5, "unit": stored})
+        field = "attribute 'unit'"
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--json"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    got = json.loads(done.stdout)
+    assert got["unit"] == unit and same(got["pitch"], [0.5] * 3)
+    assert np.isclose(got["volume"], np.count_nonzero(volume) * 0.125)
+    warned = [line for line in done.stderr.splitlines() if "not the text of a length unit" in line]
+    assert len(warned) == (unit is None), done.stderr
+    if unit is None:
+        assert f"{field} is " in warned[0]

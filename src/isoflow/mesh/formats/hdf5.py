@@ -49,11 +49,11 @@ from .registry import (
     RawVolume,
     check_shape,
     import_library,
-    length_unit,
     names_from_json,
     names_json,
     reading,
     stored_values,
+    unit_field,
 )
 
 DEFAULT_DATASET = "volume"
@@ -88,7 +88,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     # element_size_um is in micrometres by its name; isoflow's own pitch has its unit beside it, if any
     unit = "\u00b5m" if "pitch" not in attrs and "element_size_um" in attrs else None
     if "unit" in attrs:
-        unit = length_unit(attrs["unit"])
+        unit = unit_field(attrs["unit"], f"{where}: attribute 'unit'")
     names = names_from_json(attrs["label_names"], where, "attribute 'label_names'") if "label_names" in attrs else None
     space = space_given(str(attrs["space"]), f"{where}: attribute 'space'") if "space" in attrs else None
     return RawVolume(np.asarray(array), pitch, attrs.get("origin"), offset, attrs.get("parity", 0), unit=unit,

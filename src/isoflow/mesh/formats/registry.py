@@ -416,6 +416,36 @@ def axis_units(units, where: str, what: str) -> tuple[np.ndarray, str | None]:
     return factors, None
 
 
+def unit_field(value: object, where: str) -> str | None:
+    """The length unit a file's ``unit`` field holds (:func:`length_unit`
+    of its text: a string, bytes, or a NumPy array of one), or None, said
+    in a warning, where the field holds no text (a number, several
+    strings): the volume is read, with no unit, rather than with the
+    value's repr printed as its unit.
+
+    Parameters
+    ----------
+    value : object
+        The field as the format's reader gives it.
+    where : str
+        The file and field, as the warning names them (``"a.npz: array 'unit'"``).
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> unit_field(np.array("micron"), "a.npz: array 'unit'"), unit_field(b"mm", "a.h5: attribute 'unit'")
+    ('\u00b5m', 'mm')
+    """
+    text = value.item() if isinstance(value, np.ndarray) and value.ndim == 0 else value
+    if isinstance(text, (str, bytes)):
+        return length_unit(text)
+    note(f"{where} is {given_text(value)}, not the text of a length unit; no unit is reported")
+    return None
+
+
 #: OME-Zarr's axis units (NGFF 0.4: UDUNITS-2 names) of isoflow's spellings
 UDUNITS = {"m": "meter", "cm": "centimeter", "mm": "millimeter", "\u00b5m": "micrometer", "nm": "nanometer",
            "pm": "picometer", "\u00c5": "angstrom", "km": "kilometer", "in": "inch", "ft": "foot", "yd": "yard",
