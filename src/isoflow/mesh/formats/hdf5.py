@@ -1,8 +1,9 @@
 """HDF5, ``FILE.h5:/path/to/dataset`` (h5py).
 
 Axes: the dataset's axes as stored (C order), axis 0 being x, as for
-``.npy``. Without a dataset path the file must hold one dataset, or one
-named ``volume``; otherwise the error lists the datasets to choose from
+``.npy``. Without a dataset path the file must hold one dataset, one
+named ``volume``, or one of 2 to 4 axes beside datasets of fewer (a name,
+a voxel size); otherwise the error lists the datasets to choose from
 (a dataset an external link names among them). A dataset whose axes
 vigra's ``axistags`` attribute names (ilastik's exports) is read by them
 (:func:`tagged_axes`): a channel axis of one entry dropped, of several
@@ -187,7 +188,12 @@ def _choose(f, h5py, path, dataset) -> str:
     if not names:
         broken = "".join(f"; its external link /{n} names {t}, which cannot be opened" for n, t in dangling[:3])
         raise IsoflowError(f"{path}: holds no dataset{broken}")
-    raise IsoflowError(f"{path}: holds datasets {_listed(names)}; name one, e.g. {path}:/{names[0]}")
+    # beside a scalar or a list (a name, a voxel size) one array of 2 to 4
+    # axes is the file's volume
+    arrays = [n for n in names if 2 <= len(f[n].shape) <= 4]
+    if len(arrays) == 1:
+        return arrays[0]
+    raise IsoflowError(f"{path}: holds datasets {_listed(names)}; name one, e.g. {path}:/{(arrays or names)[0]}")
 
 
 def _datasets(f, h5py) -> tuple[list[str], list[tuple[str, str]]]:
