@@ -194,6 +194,33 @@ def test_point_list_with_a_header_of_column_names_reads_its_points(tmp_path, cap
     fails(capsys, "info", tmp_path / "words.txt", words=("words.txt:1", "not a number: 'x'"))
 
 
+def test_point_list_with_pandas_index_column_is_refused_naming_index_false(tmp_path):
+    """cli.md said a header "such as the ``x,y,z`` header pandas' ``to_csv``
+    writes" is skipped; ``to_csv`` writes its index by default, a header
+    ``,x,y,z`` over rows ``i,x,y,z``, which was refused as "empty
+    coordinate in ',x,y,z'". It is refused in one line naming the index
+    column and ``index=False`` (the file below is what pandas' default
+    writes: csv with an unnamed first column of 0, 1, 2 ...)."""
+    import csv
+    import subprocess
+    import sys
+
+    points = np.random.default_rng(6).integers(-20, 20, size=(12, 3))
+    with open(tmp_path / "points.csv", "w", newline="") as fh:
+        writer = csv.writer(fh, lineterminator="\n")
+        writer.writerow(["", "x", "y", "z"])
+        writer.writerows([i, *map(int, p)] for i, p in enumerate(points))
+    run = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "points.csv")],
+                         capture_output=True, text=True)
+    lines = run.stderr.strip().splitlines()
+    assert run.returncode == 2 and len(lines) == 1 and "Traceback" not in run.stderr, run.stderr
+    assert "points.csv:1:" in lines[0] and "',x,y,z'" in lines[0] and "index=False" in lines[0], lines[0]
+    with pytest.raises(IsoflowError, match="index=False"):
+        read_points(tmp_path / "points.csv")
+    text = " ".join((Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text().split())
+    assert "pandas' `to_csv(path, index=False)` writes" in text
+
+
 def test_point_list_read_whole_equals_line_by_line(tmp_path):
     """numpy's reader (the fast path) and the line-by-line one read the
     same points, with comments, blank lines, signs, exponents and every

@@ -578,8 +578,10 @@ _NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 def read_points(path: str | os.PathLike) -> np.ndarray:
     """Integer lattice points from a text file: ``x y z`` (or ``x y``) per
     line, ``#`` starts a comment, blanks or commas separate the numbers. A
-    first line of column names (``x,y,z``, as pandas' ``to_csv`` writes
-    it) is skipped where the next line holds as many numbers.
+    first line of column names (``x,y,z``, as pandas'
+    ``to_csv(path, index=False)`` writes it) is skipped where the next line
+    holds as many numbers; pandas' index column (``,x,y,z``, its default)
+    is refused, naming ``index=False``.
 
     numpy's compiled reader takes the file when it can; a file it refuses,
     or whose numbers are not all integers in range, is read again line by
@@ -710,10 +712,13 @@ volume or mesh format)
 
 def _header_line(path: Path) -> int:
     """The number of the line that is a header of column names (``x,y,z``,
-    as pandas' ``to_csv`` writes one), 0 where there is none: the first
-    line that is neither blank nor a comment, where none of its fields is
-    a number and the next such line is as many numbers (a file of words is
-    still refused naming its first line)."""
+    as pandas' ``to_csv(path, index=False)`` writes one), 0 where there is
+    none: the first line that is neither blank nor a comment, where none of
+    its fields is a number and the next such line is as many numbers (a
+    file of words is still refused naming its first line). A header of an
+    unnamed first column and names (``,x,y,z``: pandas' index, which
+    ``to_csv`` writes by default) over rows of as many numbers is refused
+    naming ``index=False``."""
     lines = []
     with open(path, encoding="utf-8-sig") as fh:
         for lineno, line in enumerate(fh, 1):
@@ -728,6 +733,13 @@ def _header_line(path: Path) -> int:
     # a header's names are split at commas where it has them ("x (mm), y (mm), z (mm)"), else at blanks
     names = [f.strip() for f in first.split(",")] if "," in first else first.split()
     numbers = _SPLIT.split(second)
+    # pandas' to_csv writes its index by default: an unnamed first column
+    # (",x,y,z") before the coordinates on every row, which no point has
+    if (len(names) - 1 in (2, 3) and not names[0] and all(names[1:]) and len(numbers) == len(names)
+            and not any(_NUMBER.fullmatch(f) for f in names[1:]) and all(_NUMBER.fullmatch(f) for f in numbers)):
+        raise IsoflowError(f"{path}:{lineno}: a header {first!r} whose first column has no name, as pandas' "
+                           "to_csv writes its index: every row holds that index before the coordinates; "
+                           "write the points with to_csv(path, index=False)")
     if (len(names) != len(numbers) or len(names) not in (2, 3) or any(_NUMBER.fullmatch(f) for f in names)
             or not all(_NUMBER.fullmatch(f) for f in numbers)):
         return 0
