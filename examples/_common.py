@@ -24,10 +24,21 @@ def parse_args(description: str, add_arguments=None) -> argparse.Namespace:
         add_arguments(parser)
     show_defaults(parser)
     args = parser.parse_args()
+    if getattr(args, "mesh", None):
+        args.mesh = sample_or_file(args.mesh)
     show_notes()
     args.out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="isoflow-example-"))
     args.out.mkdir(parents=True, exist_ok=True)
     return args
+
+
+def sample_or_file(name: str) -> str:
+    """A mesh argument: the file it names, else the sample of isoflow.data
+    of that name (``--mesh eight.off``, as ``-h`` names the default), else
+    as given (its reader then says the file is missing)."""
+    if Path(name).exists() or name not in isoflow.data.names():
+        return name
+    return str(isoflow.data.path(name))
 
 
 def show_defaults(parser: argparse.ArgumentParser) -> None:
