@@ -239,7 +239,10 @@ def trimesh_figures(path, weld: bool = False, unit: float = 1.0, area: bool = Fa
 
     A PLY or an STL is parsed by trimesh's reader of the format and the
     mesh built from its arrays alone (a PLY's colours cost a third of the
-    read, measured on flow steps, and do not touch the topology). The volume is the signed volume of the
+    read, measured on flow steps, and do not touch the topology); a GLB's
+    nodes are those of trimesh's glTF reader placed by their transforms
+    (:func:`scene_nodes`), joined as ``trimesh.load(force="mesh")`` joins
+    them, without the colours. The volume is the signed volume of the
     triangles trimesh read (``trimesh.volume`` also integrates the inertia:
     another third).
     """
@@ -257,6 +260,19 @@ def trimesh_figures(path, weld: bool = False, unit: float = 1.0, area: bool = Fa
         tm = trimesh.Trimesh(kw["vertices"], kw["faces"], process=False)
     elif (read := obj_as_trimesh_reads(path)) is not None:
         tm = trimesh.Trimesh(*read, process=False)
+    elif path.suffix.lower() == ".glb":
+        # the nodes as trimesh's glTF reader places them, which
+        # trimesh.load(force="mesh") joins into one mesh: it copies the mesh
+        # twice, deriving face colours from the vertex colours at each copy
+        # (most of the read-back), which do not touch the topology
+        nodes = list(scene_nodes(path).values())
+        if len(nodes) == 1:
+            tm = trimesh.Trimesh(*nodes[0], process=False)
+        else:
+            first = np.cumsum([0] + [len(v) for v, _ in nodes])
+            tm = trimesh.Trimesh(np.concatenate([v for v, _ in nodes] or [np.zeros((0, 3))]),
+                                 np.concatenate([t + k for (_, t), k in zip(nodes, first)] or
+                                                [np.zeros((0, 3), np.int64)]), process=False)
     else:
         import warnings
 
