@@ -764,7 +764,7 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
     >>> [s["voxels"] for s in r.steps], sorted(p.name for p in folder.glob("step_*"))
     ([27, 8, 1, 0], ['step_000.zarr', 'step_001.zarr', 'step_002.zarr'])
     """
-    from ..scale.compiled import check_threads
+    from ..scale.compiled import thread_argument
     from .motion import flow_connectivity
     from .run import check_count, max_steps_for, run_engine
 
@@ -775,7 +775,7 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
     steps, max_steps = check_count("steps", steps), check_count("max_steps", max_steps)
     until_topology_change = check_switch(until_topology_change, "until_topology_change", "flow_chunked")
     check_callable(progress, "progress", "progress(step, state)")
-    workers, width = check_threads(workers, "workers"), check_threads(width, "width")
+    workers, width = thread_argument(workers, "workers"), thread_argument(width, "width")
     clear_earlier_run(Path(directory), check_switch(force, "force", "flow_chunked"))
     engine = ChunkedFlow(conn, directory, width=width, slab=slab, scheduler=scheduler, workers=workers)
     state = engine.start(source)
