@@ -531,9 +531,10 @@ def refuse_time_series_store(args: argparse.Namespace, needs: str) -> None:
 
     if split_dataset(args.input)[0].suffix.lower() != ".zarr":
         return
-    shape = stored_shape(args.input)
+    label = getattr(args, "label", None)
+    shape = stored_shape(args.input, label is not None)  # with a label, (X, Y, Z, 1) is a 3D label image
     if len(shape) == 4:
-        hint = one_time_point(args.input, shape, getattr(args, "label", None))
+        hint = one_time_point(args.input, shape, label)
         raise IsoflowError(f"{args.input}: {needs}, this one is 4D{hint}")
 
 

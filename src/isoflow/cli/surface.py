@@ -74,7 +74,7 @@ def surface_of(args: argparse.Namespace) -> int:
         raise IsoflowError(f"{args.output}: --suffix names the files of --labels -o DIR/")
     # a time series refused as in memory, however large (is_store takes 3D stores only)
     refuse_time_series_store(args, "surface needs a 3D object")
-    if is_store(args.input):
+    if is_store(args.input, args.label):
         if streams(args):
             return cmd_surface_store(args)
         refuse_store_beyond_memory(args)
@@ -205,12 +205,13 @@ def read_back(args: argparse.Namespace, out: Path, mesh, obj, comps) -> int:
     return 0
 
 
-def is_store(name: str) -> bool:
-    """A 3D zarr store: its surface is written block by block."""
+def is_store(name: str, label: float | None = None) -> bool:
+    """A 3D zarr store: its surface is written block by block (with a
+    ``label``, a plain array of shape (X, Y, Z, 1) is a 3D label image)."""
     from ..mesh.formats.omezarr import stored_ndim
     from ..mesh.formats.registry import split_dataset
 
-    return split_dataset(name)[0].suffix.lower() == ".zarr" and stored_ndim(name) == 3
+    return split_dataset(name)[0].suffix.lower() == ".zarr" and stored_ndim(name, label is not None) == 3
 
 
 def cmd_surface_store(args: argparse.Namespace) -> int:

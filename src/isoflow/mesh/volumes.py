@@ -220,6 +220,8 @@ def read_volume_as_stored(path: str | os.PathLike, label: int | np.integer | flo
     ('bool', None, 'uint8')
     """
     raw = _read_raw(path, time=time)
+    if label is not None:  # a label image, read as read_labels reads it
+        raw = _one_channel(raw, time)
     return as_object(raw, str(path), label), raw.unit, raw.array.dtype
 
 
@@ -320,6 +322,19 @@ def _read_raw(path: str | os.PathLike, mesh: str | None = None, time: int | np.i
         return fmt.load().read(file, dataset, time=time)
     raw = fmt.load().read(file, dataset)
     return _time_point(raw, check_time(time, np.shape(raw.array), str(path)))
+
+
+def _one_channel(raw: RawVolume, time: int | np.integer | None) -> RawVolume:
+    """A label image's ``raw`` as 3D where its array is 4D with a last axis
+    of one entry and no ``time`` was asked: a 3D segmentation saved with a
+    channel axis (ilastik's HDF5 (z, y, x, 1), an .npy of shape
+    (X, Y, Z, 1)) has one 3D image to read, as NIfTI's reader drops such
+    an axis; ``raw`` itself otherwise. A mask with no label asked stays 4D:
+    its 0/1 values may be a 4D object one voxel thick."""
+    arr = np.asarray(raw.array)
+    if time is None and arr.ndim == 4 and arr.shape[3] == 1:
+        return _time_point(dataclasses.replace(raw, array=arr), 0)
+    return raw
 
 
 def _time_point(raw: RawVolume, time: int) -> RawVolume:
@@ -530,13 +545,8 @@ def read_labels(path: str | os.PathLike, *, time: int | np.integer | None = None
     raw = _read_raw(path, mesh="a mesh, not a label image; voxelize A.stl B.obj --resolution R -o LABELS.nii.gz "
                                "makes one of several meshes (isoflow.voxelize_meshes)", time=time)
     said_of(raw)
+    raw = _one_channel(raw, time)
     arr = np.asarray(raw.array)
-    if time is None and arr.ndim == 4 and arr.shape[3] == 1:
-        # a 3D segmentation saved with a channel axis of one entry (ilastik's
-        # HDF5 (z, y, x, 1), an .npy of shape (X, Y, Z, 1)) has one 3D image
-        # to read, as NIfTI's reader drops such an axis
-        raw = _time_point(dataclasses.replace(raw, array=arr), 0)
-        arr = np.asarray(raw.array)
     if arr.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a label image is read in 3D or 2D, this array is {arr.ndim}D with shape "
                            f"{arr.shape}" + (one_time_point_labels(path) if arr.ndim == 4 else ""))

@@ -315,17 +315,23 @@ class StoreArray:
         if self.multiscale is None:
             attrs = dict(getattr(self.array, "attrs", {}) or {})
             if "pitch" in attrs and "origin" in attrs:
-                return np.asarray(attrs["pitch"], np.float64), np.asarray(attrs["origin"], np.float64)
+                return tuple(self._own_axes(np.asarray(attrs[k], np.float64)) for k in ("pitch", "origin"))  # type: ignore[return-value]
             return None, None
         scale, shift = placement_of(self.multiscale, self.dataset, self.array.ndim, self.where)
         return scale[self.xyz], shift[self.xyz] - scale[self.xyz] / 2
+
+    def _own_axes(self, value: np.ndarray) -> np.ndarray:
+        """A plain array's attribute of one entry per stored axis, of the
+        x, y, z axes alone (a channel axis read at 0 has none); one number
+        for every axis, or another count, as it is (checked where used)."""
+        return value[self.xyz] if value.ndim == 1 and len(value) == self.array.ndim else value
 
     def unit(self) -> str | None:
         """The length unit of the placement (:func:`axis_unit`)."""
         return axis_unit(self.multiscale, self.xyz, self.where)
 
 
-def open_store(path: str | os.PathLike, time: bool = False) -> StoreArray:
+def open_store(path: str | os.PathLike, time: bool = False, channel: bool = False) -> StoreArray:
     """A zarr store's volume array with its axes matched by name, not
     read: what the block-by-block readers share.
 
@@ -339,6 +345,11 @@ def open_store(path: str | os.PathLike, time: bool = False) -> StoreArray:
         as a fourth entry of ``xyz``, as :func:`read` reads it (see
         :func:`~isoflow.scale.chunks.spatial_axes`); by default it is
         refused.
+    channel : bool
+        A plain array of shape (X, Y, Z, 1) is a 3D label image saved with
+        a channel axis of one entry: its x, y, z axes are the first three,
+        the last indexed at 0, as :func:`isoflow.read_labels` reads such a
+        file (and ``read_volume`` with a ``label``). By default it is 4D.
 
     Returns
     -------
@@ -365,24 +376,30 @@ def open_store(path: str | os.PathLike, time: bool = False) -> StoreArray:
     >>> g.attrs["multiscales"] = [{"axes": ["t", "z", "y", "x"], "datasets": [{"path": "t"}]}]
     >>> open_store(f"{d}:t", time=True).xyz
     [3, 2, 1, 0]
+    >>> _ = zarr.open_array(str(d.parent / "x1.zarr"), mode="w", shape=(4, 5, 6, 1), dtype="u1")
+    >>> open_store(d.parent / "x1.zarr").xyz, open_store(d.parent / "x1.zarr", channel=True).xyz
+    ([0, 1, 2, 3], [0, 1, 2])
     """
     file, level = split_dataset(path)
     where = str(path)
     array, multiscale, dataset = open_zarr_node(file, level)
     if multiscale is None:
+        if channel and array.ndim == 4 and array.shape[3] == 1:
+            return StoreArray(array, where, None, None, [0, 1, 2], [3])
         return StoreArray(array, where, None, None, list(range(array.ndim)), [])
     xyz, other = spatial_axes(axis_names(multiscale, array.ndim, where), array.shape, where, time=time)
     return StoreArray(array, where, multiscale, dataset, xyz, other)
 
 
-def stored_ndim(path) -> int:
+def stored_ndim(path, channel: bool = False) -> int:
     """The dimension of a zarr store's volume (``IMAGE.zarr:LEVEL`` too):
     its x, y and z axes in an OME-Zarr image (and a time axis of several
-    entries beside them: 4), every axis of a plain array."""
-    return len(stored_shape(path))
+    entries beside them: 4), every axis of a plain array (``channel``: but
+    a last axis of one entry, see :func:`open_store`)."""
+    return len(stored_shape(path, channel))
 
 
-def stored_shape(path: str | os.PathLike) -> tuple[int, ...]:
+def stored_shape(path: str | os.PathLike, channel: bool = False) -> tuple[int, ...]:
     """The shape of a zarr store's volume as :func:`read` gives it, from
     the metadata alone (the volume is not read).
 
@@ -390,6 +407,9 @@ def stored_shape(path: str | os.PathLike) -> tuple[int, ...]:
     ----------
     path : str or os.PathLike
         ``STORE.zarr`` or ``IMAGE.zarr:LEVEL``.
+    channel : bool
+        A plain array's last axis of one entry is no axis of the volume
+        (a label image's channel, :func:`open_store`).
 
     Returns
     -------
@@ -406,7 +426,7 @@ def stored_shape(path: str | os.PathLike) -> tuple[int, ...]:
     (5, 4, 3, 2)
     """
     import_library("zarr", "OME-Zarr")
-    store = open_store(path, time=True)
+    store = open_store(path, time=True, channel=channel)
     return tuple(int(store.array.shape[i]) for i in store.xyz)
 
 
@@ -505,7 +525,7 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
     from ...digital.outofcore import analyze_in_xyz, analyze_zarr_volume
 
     import_library("zarr", "OME-Zarr")
-    store = open_store(path)
+    store = open_store(path, channel=label is not None)  # a label image: (X, Y, Z, 1) is 3D
     place = store_place(store, path)
     if label is None:
         return analyze_zarr_volume(path, connectivity, progress=progress, surfaces=surfaces, threads=threads, **place)
@@ -528,7 +548,7 @@ def label_absent(path, label) -> IsoflowError:
     from ...scale.chunks import import_dask
 
     _, da = import_dask()
-    store = open_store(path)
+    store = open_store(path, channel=True)
     return no_such_label(label, np.unique(da.unique(store.lazy()).compute()), store.where, len(store.xyz))
 
 
@@ -559,7 +579,7 @@ def store_volume(path, label=None) -> tuple:
     from ...scale.chunkcache import ChunkReader
 
     import_library("zarr", "OME-Zarr")
-    store = open_store(path)
+    store = open_store(path, channel=label is not None)  # a label image: (X, Y, Z, 1) is 3D
     if len(store.xyz) != 3:
         raise IsoflowError(f"{store.where}: surface needs a 3D volume, this store holds {len(store.xyz)}D")
     pitch, origin = store.placement()
