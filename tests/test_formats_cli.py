@@ -272,13 +272,14 @@ def test_surface_of_a_store_counts_the_voxels_of_the_block_it_names(tmp_path, ca
     count, corner = block_named(line)
     assert all(c % 5 == 0 for c in corner), line
     assert count == np.count_nonzero(labels[tuple(slice(c, c + 5) for c in corner)] > 1) > 0
-    # a 2 on the first layer of the second chunk: in the margin the first block reads
+    # a 2 and a 3 on the first layer of the second chunk: in the margin the first block reads (two
+    # labels: a store of 0 and 2 alone is the mask of 2, as in memory)
     lone = np.zeros((10, 10, 10), np.uint8)
-    lone[5, 0, 0] = 2
+    lone[5, 0, 0], lone[5, 0, 1] = 2, 3
     zarr.create_array(str(tmp_path / "m.zarr"), data=lone, chunks=(5, 5, 5), zarr_format=2)
     line = fails(capsys, "surface", tmp_path / "m.zarr", "-o", tmp_path / "m.ply", "--threads", threads,
                  words=("m.zarr: not a binary volume",))
-    assert block_named(line) == (1, [5, 0, 0])
+    assert block_named(line) == (2, [5, 0, 0])
 
 
 def corrupt_files(tmp_path):

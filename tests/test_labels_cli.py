@@ -295,6 +295,7 @@ def test_a_store_read_as_nan_where_never_written_is_refused_with_what_would_read
     labels = zarr.create_array(str(tmp_path / "labels.zarr"), shape=(8, 8, 8), chunks=(4, 8, 8), dtype="u1",
                                fill_value=0)
     labels[:4] = mask[:4] * 2
+    labels[0, 0, 0] = 3  # two labels: a store of 0 and 2 alone is the mask of 2, as in memory
     code, err, _ = info(tmp_path / "labels.zarr")
     assert code == 2 and len(err) == 1 and err[0].endswith("or give every label its row with --labels "
                                                            "(isoflow.label_table(isoflow.read_labels(path)))"), err

@@ -220,8 +220,9 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     from ..digital.connectivity import default_connectivity
     from ..digital.lattice import DigitalObject
     from ..mesh.export import check_float64_corners
-    from ..mesh.formats.omezarr import label_absent, store_volume
+    from ..mesh.formats.omezarr import label_absent, one_value_of_store, open_store, store_volume
     from ..mesh.surface_blocks import EmptySurface, write_surface_blocks
+    from ..scale.arrays import NotBinary
     from .progress import progress_bar, reading_back
 
     refuse_mesh_options(args, ".zarr")
@@ -231,11 +232,23 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     # a placement no file holds: refused before any block
     corners = check_float64_corners(args.input, frame.origin, frame.spacing, array.shape)
     conn = args.connectivity or default_connectivity(3)
+
+    def write(array):
+        return write_surface_blocks(array, args.output, conn, frame=frame, threads=args.threads, progress=show,
+                                    force=args.force, where=args.input, triangulate=args.triangulate,
+                                    comments=surface_comments(args.input, conn))
+
     with progress_bar(args, "blocks") as show, label_options(args):
         try:
-            written = write_surface_blocks(array, args.output, conn, frame=frame, threads=args.threads, progress=show,
-                                           force=args.force, where=args.input, triangulate=args.triangulate,
-                                           comments=surface_comments(args.input, conn))
+            try:
+                written = write(array)
+            except NotBinary:
+                # a store of 0 and one other value is that value's mask, as read_volume reads it
+                value = None if args.label is not None else one_value_of_store(open_store(args.input))
+                if value is None:
+                    raise
+                array = store_volume(args.input, value)[0]
+                written = write(array)
         except EmptySurface:
             if args.label is None:
                 raise

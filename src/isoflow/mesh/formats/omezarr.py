@@ -48,6 +48,7 @@ from numpy.typing import ArrayLike
 from ...digital.lattice import DigitalObject
 from ...digital.report import Report
 from ...errors import IsoflowError, check_path, counted, warn
+from ...scale.arrays import NotBinary
 from ...scale.chunks import axis_names, never_written, open_zarr_node, spatial_axes, split_store, unwritten_fill
 from .registry import (
     UDUNITS,
@@ -505,11 +506,93 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | np.integer | None 
         # would give its measures in voxels; read_volume and info refuse it too, naming IMG.zarr:0
         refuse_inside_store(file, path)
     import_library("zarr", "OME-Zarr")
-    own = store_place(open_store(path), path)
+    store = open_store(path)
+    own = store_place(store, path)
     given = {"pitch": pitch, "origin": origin, "unit": unit}
     place = {k: own[k] if v is None else v for k, v in given.items()}
-    return analyze_zarr_volume(path, connectivity, block_shape=block_shape, scheduler=scheduler, surfaces=surfaces,
-                                threads=threads, progress=progress, **place)
+    options = {"block_shape": block_shape, "scheduler": scheduler, "surfaces": surfaces, "threads": threads,
+               "progress": progress}
+    try:
+        return analyze_zarr_volume(path, connectivity, **options, **place)  # type: ignore[arg-type]
+    except NotBinary:
+        # a store of 0 and one other value is that value's mask, as read_volume reads it
+        value = one_value_of_store(store)
+        if value is None:
+            raise
+    return analyze_value(store, value, connectivity, place, **options)
+
+
+def one_value_of_store(store: StoreArray) -> object | None:
+    """The value ``v`` of a store whose only value other than 0 is one
+    ``v`` other than 1 (a mask written 0/255), found in passes over the
+    store; None where it holds another value too (a label image).
+
+    :func:`isoflow.read_volume` reads such an array as the mask of ``v``
+    (:func:`~isoflow.mesh.volumes.one_value_mask`), and so do the readers
+    of a store block by block, which call this once a block holds a value
+    other than 0 and 1: the blocks alone cannot tell a mask written 0/255
+    from a label image whose other labels lie in blocks not read yet.
+
+    Parameters
+    ----------
+    store : StoreArray
+        The store, as :func:`open_store` opens it.
+
+    Returns
+    -------
+    number or None
+        ``v``, a NumPy scalar of the array's type, or None.
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> path = Path(tempfile.mkdtemp()) / "m.zarr"
+    >>> z = zarr.create_array(str(path), shape=(4, 4, 4), chunks=(2, 2, 2), dtype="u1")
+    >>> z[1:3, 1:3, 1:3] = 255
+    >>> one_value_of_store(open_store(path))
+    np.uint8(255)
+    >>> z[0, 0, 0] = 7
+    >>> one_value_of_store(open_store(path)) is None
+    True
+    """
+    from ...scale.chunks import import_dask
+
+    _, da = import_dask()
+    lazy = store.lazy()
+    if lazy.dtype.kind not in "iuf" or not lazy.size:
+        return None
+    low, high = da.compute(lazy.min(), lazy.max())
+    value = high if high != 0 else low
+    if value == 1 or value == 0 or not np.isfinite(value) or (low != 0 and high != 0 and low != high):
+        return None
+    return value if bool(((lazy == 0) | (lazy == value)).all().compute()) else None
+
+
+def analyze_value(store: StoreArray, value, connectivity: int | None, place: dict, **options: Any) -> Report:
+    """The report of the voxels of ``store`` equal to ``value`` (a label,
+    or the one value of a mask written 0/255), block by block, placed by
+    ``place`` (:func:`store_place`); ``options`` as
+    :func:`~isoflow.digital.outofcore.analyze_in_xyz` takes them.
+
+    Examples
+    --------
+    Label 5 of two, a ring around label 3:
+
+    >>> import tempfile, zarr
+    >>> labels = np.full((5, 5, 1), 5, np.uint16)
+    >>> labels[2, 2, 0] = 3
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> zarr.create_array(str(folder / "l.zarr"), data=labels, chunks=(3, 3, 1))[...].max()
+    np.uint16(5)
+    >>> store = open_store(folder / "l.zarr")
+    >>> analyze_value(store, 5, 6, store_place(store, folder))["betti"]
+    [1, 1, 0]
+    """
+    from ...digital.outofcore import analyze_in_xyz
+
+    # the lazy array drops the other axes: the x, y, z ones, in stored order, are left
+    order = [int(i) for i in np.argsort(np.argsort(store.xyz))]
+    return analyze_in_xyz(store.lazy() == value, order, connectivity, where=store.where, **options, **place)
 
 
 def analyze_store(path, connectivity: int | None = None, label=None, progress=None, *,
@@ -522,18 +605,22 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
     A ``label`` that no voxel has is refused, as :func:`isoflow.read_volume`
     refuses it (the values present are then read in a second pass). The
     world measures are placed as :func:`read` places the volume."""
-    from ...digital.outofcore import analyze_in_xyz, analyze_zarr_volume
+    from ...digital.outofcore import analyze_zarr_volume
 
     import_library("zarr", "OME-Zarr")
     store = open_store(path, channel=label is not None)  # a label image: (X, Y, Z, 1) is 3D
     place = store_place(store, path)
     if label is None:
-        return analyze_zarr_volume(path, connectivity, progress=progress, surfaces=surfaces, threads=threads, **place)
+        try:
+            return analyze_zarr_volume(path, connectivity, progress=progress, surfaces=surfaces, threads=threads,
+                                       **place)
+        except NotBinary:
+            # a store of 0 and one other value is that value's mask, as read_volume reads it
+            label = one_value_of_store(store)
+            if label is None:
+                raise
     label = check_label(label, store.array.dtype, store.where)
-    # the lazy array drops the other axes: the x, y, z ones, in stored order, are left
-    order = [int(i) for i in np.argsort(np.argsort(store.xyz))]
-    report = analyze_in_xyz(store.lazy() == label, order, connectivity, where=store.where, progress=progress,
-                            surfaces=surfaces, threads=threads, **place)
+    report = analyze_value(store, label, connectivity, place, progress=progress, surfaces=surfaces, threads=threads)
     if report["voxels"] == 0:
         raise label_absent(path, label)
     never_written(store.where, unwritten_fill(store.array, label), label)
