@@ -467,7 +467,9 @@ def one_time_point(path: str | Path, shape: tuple[int, ...], label: float | None
     """What to do with a 4D volume (read as x, y, z, t) given to a command
     that takes one 3D volume: save one entry of its 4th axis as a 3D file,
     voxel size and origin kept, and give that. A .npy or TIFF does not say
-    whether that axis is time or channels (RGB), so the line names both.
+    whether that axis is time or channels (RGB), so the line names both;
+    where the file names it (an OME-Zarr image's ``t``), the line says so
+    (:func:`~isoflow.mesh.formats.registry.fourth_axis_words`).
 
     There is no option that picks a time point: the one line of Python is
     the way, and it names the file as given. It reads that time point
@@ -497,10 +499,13 @@ and give that: python -c 'import isoflow; isoflow.write_volume(isoflow.read_volu
     import json
     import shlex
 
+    from ..mesh.formats.registry import fourth_axis_words
+
+    what, entry = fourth_axis_words(path, shape[-1])
     label_arg = "" if label is None else f", label={label!r}"
     code = f'import isoflow; isoflow.write_volume(isoflow.read_volume({json.dumps(str(path))}{label_arg}, time=0), "t0.npz")'
-    return (f", shape {'x'.join(map(str, shape))} (a 4th axis of {shape[-1]} entries, time points or channels, read "
-            f"as x, y, z, t); save one entry as 3D and give that: python -c {shlex.quote(code)}")
+    return (f", shape {'x'.join(map(str, shape))} ({what}, read as x, y, z, t); save one {entry} as 3D and give "
+            f"that: python -c {shlex.quote(code)}")
 
 
 def refuse_time_series_store(args: argparse.Namespace, needs: str) -> None:
