@@ -4,6 +4,8 @@ traceback, no silently wrong value, nothing written."""
 import json
 import os
 import re
+import subprocess
+import sys
 import zipfile
 from pathlib import Path
 
@@ -192,6 +194,36 @@ def test_point_list_with_a_header_of_column_names_reads_its_points(tmp_path, cap
     assert json.loads(capsys.readouterr().out)["voxels"] == len(np.unique(points, axis=0))
     (tmp_path / "words.txt").write_text("x,y,z\nthe points follow\n")
     fails(capsys, "info", tmp_path / "words.txt", words=("words.txt:1", "not a number: 'x'"))
+
+
+@pytest.mark.parametrize("first", ["", "index"], ids=["to_csv", "reset_index"])
+def test_point_list_written_with_its_index_column_reads_its_points(tmp_path, first):
+    """pandas' ``DataFrame.to_csv()`` writes the frame's index as a first
+    column named "" (``,x,y,z``; "index" after ``reset_index``), 0, 1, 2,
+    ... down its rows: the file was refused ("empty coordinate in
+    ',x,y,z'"). That column is now skipped, on either reader (the blanks
+    and commas mixed of the second file need the line reader), and the
+    command reads the points written; a line of the wrong count is still
+    refused naming it. pandas is not installed: the files are written as it
+    writes them."""
+    rng = np.random.default_rng(7)
+    points = rng.integers(-20, 20, size=(30, 3))
+    rows = "".join(f"{i},{a},{b},{c}\n" for i, (a, b, c) in enumerate(points))
+    (tmp_path / "points.csv").write_text(f"{first},x,y,z\n{rows}")
+    assert read_points(tmp_path / "points.csv").tolist() == points.tolist()
+    spaced = "".join(f"{i}, {a} {b} {c}\n" for i, (a, b, c) in enumerate(points))  # blanks and commas mixed
+    (tmp_path / "spaced.csv").write_text(f"{first},x,y,z\n{spaced}")
+    assert read_points(tmp_path / "spaced.csv").tolist() == points.tolist()
+    (tmp_path / "plane.csv").write_text(f"{first},x,y\n" + "".join(f"{i},{a},{b}\n" for i, (a, b, _) in enumerate(points)))
+    assert read_points(tmp_path / "plane.csv").tolist() == points[:, :2].tolist()
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "points.csv"), "--points-are", "voxels",
+                           "--json"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout)
+    assert report["voxels"] == len(np.unique(points, axis=0)) and report["dimension"] == 3
+    (tmp_path / "short.csv").write_text(f"{first},x,y,z\n0,1,2,3\n1,4,5\n")
+    with pytest.raises(IsoflowError, match=re.escape("short.csv:3: expected 3 coordinates, got 2")):
+        read_points(tmp_path / "short.csv")
 
 
 def test_point_list_read_whole_equals_line_by_line(tmp_path):
