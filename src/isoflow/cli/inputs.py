@@ -547,11 +547,11 @@ def refuse_time_series_store(args: argparse.Namespace, needs: str) -> None:
 #: takes no --label, so the way to one label is the flow in memory
 BLOCK_LABEL = (", or select one label with --label N in the flow in memory (without --volumes .zarr), or write "
                "its voxels as a store of their own")
-#: the same for a block of 0 and one other value V: the flow in memory reads
-#: a store of 0 and V alone as its mask, with no option (--label V there
-#: selects V where other labels lie in blocks not read yet)
-BLOCK_MASK = (", or flow it in memory (without --volumes .zarr), which reads a store of 0 and {v} alone as its mask "
-              "(and --label {v} there selects {v} of a label image), or write its voxels as a store of their own")
+#: the same for a block of 0 and one other value V, of a store that holds
+#: other values too (a store of 0 and V alone is flowed as V's mask): the
+#: label that block offers
+BLOCK_MASK = (", or select one label with --label {v} in the flow in memory (without --volumes .zarr; {v} is the one "
+              "value other than 0 in that block), or write its voxels as a store of their own")
 
 
 @contextlib.contextmanager
