@@ -701,10 +701,8 @@ def test_a_time_series_given_to_surface_or_flow_says_how_to_take_one_time_point(
     p = subprocess.run([sys.executable, "-m", "isoflow", command[0], name, *command[1:]],
                        capture_output=True, text=True, cwd=tmp_path)
     assert p.returncode == 2 and p.stderr.count("\n") == 1 and name in p.stderr, p.stderr
-    # the OME-Zarr image names its 4th axis 't'; the TIFF's axes are not looked at for the words
-    said = ("a time series of 3 time points along its 4th axis 't'" if name.endswith(".zarr") else
-            "a 4th axis of 3 entries, time points or channels")
-    assert f"4D, shape 8x7x6x3 ({said}, read as x, y, z, t)" in p.stderr, p.stderr
+    # the OME-Zarr image and the OME-TIFF name their 4th axis t: a time series
+    assert "4D, shape 8x7x6x3 (a time series of 3 time points along its 4th axis 't', read as x, y, z, t)" in p.stderr
     line = p.stderr.split("give that: ", 1)[1].strip()
     assert line.startswith("python -c ")
     shell = subprocess.run(sys.executable + line[len("python"):], shell=True, capture_output=True, text=True,

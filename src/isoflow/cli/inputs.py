@@ -466,9 +466,9 @@ isoflow.write_volume(isoflow.DigitalObject(v.volume[:, :, :, 0], pitch=v.spacing
 def one_time_point(path: str | Path, shape: tuple[int, ...], label: float | None = None) -> str:
     """What to do with a 4D volume (read as x, y, z, t) given to a command
     that takes one 3D volume: save one entry of its 4th axis as a 3D file,
-    voxel size and origin kept, and give that. A .npy or TIFF does not say
+    voxel size and origin kept, and give that. A .npy does not say
     whether that axis is time or channels (RGB), so the line names both;
-    where the file names it (an OME-Zarr image's ``t``), the line says so
+    where the file names it (an OME-Zarr image's or a TIFF's ``t``), the line says so
     (:func:`~isoflow.mesh.formats.registry.fourth_axis_words`).
 
     There is no option that picks a time point: the one line of Python is
@@ -492,9 +492,9 @@ def one_time_point(path: str | Path, shape: tuple[int, ...], label: float | None
 
     Examples
     --------
-    >>> print(one_time_point("cells.ome.tif", (8, 8, 8, 3)))
+    >>> print(one_time_point("cells.npy", (8, 8, 8, 3)))
     , shape 8x8x8x3 (a 4th axis of 3 entries, time points or channels, read as x, y, z, t); save one entry as 3D \
-and give that: python -c 'import isoflow; isoflow.write_volume(isoflow.read_volume("cells.ome.tif", time=0), "t0.npz")'
+and give that: python -c 'import isoflow; isoflow.write_volume(isoflow.read_volume("cells.npy", time=0), "t0.npz")'
     """
     import json
     import shlex

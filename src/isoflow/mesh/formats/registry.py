@@ -626,8 +626,8 @@ def fourth_axis_words(path: str | os.PathLike, count: int | None = None) -> tupl
     """What the 4th axis of a 4D volume read as (x, y, z, t) holds, as a
     refusal says it, and what one entry of it is called: a time series
     where the file names the axis ``t`` (an OME-Zarr image's time axis, a
-    zarr array's dimension name), channels where it names it ``c``, else
-    "time points or channels" (a .npy or TIFF does not say which).
+    zarr array's dimension name, a TIFF's ``T``), channels where it names
+    it ``c``, else "time points or channels" (a .npy does not say which).
 
     Parameters
     ----------
@@ -646,10 +646,15 @@ def fourth_axis_words(path: str | os.PathLike, count: int | None = None) -> tupl
     --------
     >>> fourth_axis_words("cells.npy", 3)
     ('a 4th axis of 3 entries, time points or channels', 'entry')
+    >>> fourth_axis_words("cells.ome.tif", 3)
+    ("a time series of 3 time points along its 4th axis 't'", 'time point')
     >>> fourth_axis_words("cells.npy")
     ('a 4th axis of time points or channels', 'entry')
     """
-    name = fourth_axis_name(path) if split_store(path)[0].suffix.lower() == ".zarr" else None
+    suffix = split_store(path)[0].suffix.lower()
+    # a TIFF is read as 4D only where its axes (OME-XML's, ImageJ's) hold a T
+    # of several entries beside Z, Y, X (:func:`to_xyz`): a time series
+    name = fourth_axis_name(path) if suffix == ".zarr" else "t" if suffix in (".tif", ".tiff") else None
     entries = "" if count is None else f"{count} "
     if name == "t":
         return f"a time series of {entries}time points along its 4th axis 't'", "time point"
