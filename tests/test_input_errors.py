@@ -381,8 +381,8 @@ def test_a_label_image_refusal_names_only_options_the_command_takes(tmp_path, ca
     zarr = pytest.importorskip("zarr")
     zarr.create_array(str(tmp_path / "l.zarr"), data=labels, chunks=(3, 3, 3), zarr_format=2)
     extra = ["--out", tmp_path / "run", "--volumes", ".zarr"] if command == "flow" else extra
-    # (the flow block by block names the flow in memory, where a store of 0 and that label alone is a mask)
-    offer = "there selects" if command == "flow" else "select one label with --label "
+    # (the flow block by block names that label in the flow in memory)
+    offer = "in the flow in memory" if command == "flow" else "select one label with --label "
     line = fails(capsys, command, tmp_path / "l.zarr", *extra,
                  words=("l.zarr", "not a binary volume", "in the block at voxel", offer))
     assert ("--labels" in line) == names_labels
