@@ -22,11 +22,39 @@ def parse_args(description: str, add_arguments=None) -> argparse.Namespace:
     parser.add_argument("--force", action="store_true", help="overwrite outputs already in OUT")
     if add_arguments is not None:
         add_arguments(parser)
+    show_defaults(parser)
     args = parser.parse_args()
+    if getattr(args, "mesh", None):
+        args.mesh = sample_or_file(args.mesh)
     show_notes()
     args.out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="isoflow-example-"))
     args.out.mkdir(parents=True, exist_ok=True)
     return args
+
+
+def sample_or_file(name: str) -> str:
+    """A mesh argument: the file it names, else the sample of isoflow.data
+    of that name (``--mesh eight.off``, as ``-h`` names the default), else
+    as given (its reader then says the file is missing)."""
+    if Path(name).exists() or name not in isoflow.data.names():
+        return name
+    return str(isoflow.data.path(name))
+
+
+def show_defaults(parser: argparse.ArgumentParser) -> None:
+    """Each option's help ends with its default, as ``isoflow -h`` says
+    them: the gallery's pages name the defaults (the torus at 24 across),
+    and ``-h`` is where a user looks for them. A sample mesh's default is
+    named by its file in isoflow.data, not by where it is installed."""
+    for action in parser._actions:
+        default = action.default
+        if not action.help or "default" in action.help or default in (None, False, argparse.SUPPRESS):
+            continue
+        if isinstance(default, str) and Path(default).is_absolute():
+            shown = f"isoflow.data's {Path(default).name}"
+        else:
+            shown = " ".join(map(str, default)) if isinstance(default, list) else str(default)
+        action.help += f" (default: {shown})"
 
 
 class NoteFormat(logging.Formatter):

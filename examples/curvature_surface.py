@@ -33,7 +33,8 @@ from isoflow import data
 
 
 def arguments(parser):
-    parser.add_argument("--mesh", default=str(data.bob()), help="a closed triangle mesh")
+    parser.add_argument("--mesh", default=str(data.bob()),
+                        help="a closed triangle mesh file, or the name of one of isoflow.data's samples")
     parser.add_argument("--resolution", type=int, default=40, help="voxels along the longest side")
 
 

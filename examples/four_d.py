@@ -32,7 +32,8 @@ from isoflow import data
 
 
 def arguments(parser):
-    parser.add_argument("--mesh", default=str(data.eight()), help="a closed triangle mesh")
+    parser.add_argument("--mesh", default=str(data.eight()),
+                        help="a closed triangle mesh file, or the name of one of isoflow.data's samples")
     parser.add_argument("--resolution", type=int, default=24, help="voxels along the mesh's longest side")
     parser.add_argument("--frames", type=int, default=6, help="time steps of the moving solid")
 

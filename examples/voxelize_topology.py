@@ -31,7 +31,8 @@ from isoflow import data
 
 
 def arguments(parser):
-    parser.add_argument("--mesh", default=str(data.torus()), help="a closed triangle mesh")
+    parser.add_argument("--mesh", default=str(data.torus()),
+                        help="a closed triangle mesh file, or the name of one of isoflow.data's samples")
     parser.add_argument("--resolution", type=int, default=48, help="voxels along the longest side")
 
 

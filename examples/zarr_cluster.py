@@ -38,7 +38,8 @@ CHUNKS = (19, 29, 13)  # odd sizes: objects, tunnels and cavities cross block fa
 
 
 def arguments(parser):
-    parser.add_argument("--mesh", default=str(data.eight()), help="a closed triangle mesh")
+    parser.add_argument("--mesh", default=str(data.eight()),
+                        help="a closed triangle mesh file, or the name of one of isoflow.data's samples")
     parser.add_argument("--resolution", type=int, default=96, help="voxels along the longest side")
 
 

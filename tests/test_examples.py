@@ -66,7 +66,8 @@ def test_an_example_run_as_a_user_runs_it(tmp_path):
     """From another directory, with its options; a second run does not
     replace the outputs: one line, exit 2."""
     out = tmp_path / "out"
-    command = [sys.executable, str(EXAMPLES / "voxelize_topology.py"), str(out), "--mesh", str(data.eight()),
+    # the mesh by its sample name, as -h names the default (a path is taken too: every default is one)
+    command = [sys.executable, str(EXAMPLES / "voxelize_topology.py"), str(out), "--mesh", "eight.off",
                "--resolution", "20"]
     env = dict(os.environ, MPLBACKEND="Agg")
     first = subprocess.run(command, capture_output=True, text=True, cwd=tmp_path, env=env)
@@ -76,6 +77,27 @@ def test_an_example_run_as_a_user_runs_it(tmp_path):
         assert euler_number(z["volume"], 1) == 1 - genus("eight.off")
     again = subprocess.run(command, capture_output=True, text=True, cwd=tmp_path, env=env)
     assert again.returncode == 2 and "exists" in again.stderr and "Traceback" not in again.stderr
+
+
+@pytest.mark.parametrize("script", example_names())
+def test_an_example_s_help_gives_every_default(script, tmp_path):
+    """The gallery's pages name the examples' defaults ("at the default 24
+    voxels across"), and ``isoflow -h`` says its own, but an example's
+    ``-h`` said none: ``--mesh MESH  a closed triangle mesh``, not which
+    one, nor ``--resolution``'s. Every option that takes a value says its
+    default, a sample mesh by a name that isoflow.data has."""
+    import re
+
+    run = subprocess.run([sys.executable, str(EXAMPLES / f"{script}.py"), "-h"], capture_output=True, text=True,
+                         cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    options = run.stdout[run.stdout.index("options:"):]
+    blocks = re.split(r"\n(?=  -)", options)[1:]
+    valued = [" ".join(b.split()) for b in blocks if re.match(r"\s*--[\w-]+ [A-Z]", b)]
+    assert valued and all("default" in b for b in valued), valued
+    for name in re.findall(r"default: isoflow.data's ([\w.]+)\)", " ".join(valued)):
+        assert Path(data.path(name)).is_file(), name
+    assert not list(tmp_path.iterdir())  # -h writes nothing
 
 
 #: a script as the examples are written (``_common``), whose one call takes a compiled pass (2 million voxels)

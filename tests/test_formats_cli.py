@@ -1035,6 +1035,24 @@ def test_omezarr_levels_and_transformations_that_are_not_what_they_must_be(tmp_p
     assert not (tmp_path / "s.ply").exists()
 
 
+@pytest.mark.parametrize("scale, axis, shown", [([1.0, 2.0, -0.5], "x", "-0.5"), ([0.0, 2.0, 0.5], "z", "0")])
+def test_an_omezarr_scale_that_is_no_voxel_size_is_named_as_the_file_names_it(tmp_path, scale, axis, shown):
+    """A level whose scale is negative or 0 was refused as "'pitch' must
+    be positive ... got [-0.5, 2, 1]": isoflow's word for a field the file
+    does not have, its values turned to x, y, z. The line names the
+    level's scale, the axis and its value as the file stores them."""
+    pytest.importorskip("zarr")
+    ome_group(tmp_path / "n.zarr", [{"type": "scale", "scale": scale}], data=np.ones((3, 4, 5), np.uint8))
+    for command in (["info"], ["surface", "-o", str(tmp_path / "n.ply")], ["info", "--labels"]):
+        done = subprocess.run([sys.executable, "-m", "isoflow", command[0], str(tmp_path / "n.zarr"), *command[1:]],
+                              capture_output=True, text=True)
+        lines = done.stderr.strip().splitlines()
+        assert done.returncode == 2 and len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
+        assert (f"n.zarr: OME-Zarr level '0': the scale of axis '{axis}' is {shown} " in lines[0]
+                and "pitch" not in lines[0]), lines[0]
+    assert not (tmp_path / "n.ply").exists()
+
+
 def damaged_store(path, data, chunks=(4, 4, 4), ome=False):
     """A zarr store whose chunk 0.0.0 (0.0.0 of level 0) is garbage."""
     import zarr
@@ -1221,6 +1239,91 @@ def test_a_mask_written_0_255_is_that_mask_in_every_format(tmp_path, capsys, lab
 def _saved(path, array):
     np.save(path, array)
     return path
+
+
+def vigra_axistags(keys: str) -> str:
+    """The ``axistags`` attribute vigra's ``AxisTags.toJSON()`` writes, as
+    ilastik puts it on its exports (typeFlags: 1 channel, 2 space, 8 time)."""
+    flags = {"c": 1, "t": 8}
+    return json.dumps({"axes": [{"key": k, "typeFlags": flags.get(k, 2), "resolution": 0, "description": ""}
+                                for k in keys]}, indent=2)
+
+
+def test_an_ilastik_export_is_read_by_its_axistags(tmp_path):
+    """ilastik exports ``exported_data`` as (z, y, x, c) with vigra's
+    ``axistags``. Its channel axis was read as a fourth spatial or time
+    axis: a Simple Segmentation (c of 1) as a 4D volume one voxel thick,
+    whose b1 and b2 are not counted, and two channels of a mask as a 4D
+    series of 336 voxels. A channel of one entry is dropped, as an
+    OME-Zarr's and a TIFF's are, and several are refused; the counts are
+    numpy's of the array h5py reads."""
+    h5py = pytest.importorskip("h5py")
+    segmentation = np.ones((8, 7, 6, 1), np.uint8)  # ilastik's labels: 1 background, 2 the object
+    segmentation[2:5, 1:4, 1:5] = 2
+    segmentation[6, 5, 4] = 2
+    with h5py.File(tmp_path / "seg.h5", "w") as f:
+        f.create_dataset("exported_data", data=segmentation).attrs["axistags"] = vigra_axistags("zyxc")
+    with h5py.File(tmp_path / "two.h5", "w") as f:
+        data = np.stack([segmentation[..., 0] == 2, segmentation[..., 0] == 1], axis=-1).astype(np.uint8)
+        f.create_dataset("exported_data", data=data).attrs["axistags"] = vigra_axistags("zyxc")
+
+    def isoflow_cli(*args):
+        return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True)
+
+    done = isoflow_cli("info", tmp_path / "seg.h5", "--label", "2", "--json")
+    assert done.returncode == 0, done.stderr
+    got = json.loads(done.stdout)
+    with h5py.File(tmp_path / "seg.h5") as f:
+        stored = f["exported_data"][()]
+    assert got["shape"] == list(stored.shape[:3]) and got["voxels"] == np.count_nonzero(stored == 2)
+    from scipy import ndimage
+
+    # a box and a voxel apart: counted in 3D (b1 and b2 of a 4D reading were not counted)
+    assert got["betti"] == [ndimage.label(stored[..., 0] == 2)[1], 0, 0] == [2, 0, 0]
+    done = isoflow_cli("info", tmp_path / "two.h5")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert "axis 'c' has 2 entries (axistags zyxc, shape (8, 7, 6, 2))" in lines[0], lines[0]
+
+
+def test_a_dataset_an_hdf5_external_link_names_is_read_and_listed(tmp_path):
+    """A file that gathers other files' volumes by external links
+    (``f["v"] = h5py.ExternalLink("scan.h5", "/v")``) was "holds no dataset",
+    though h5py reads ``f["v"]`` through the link, and the link was left
+    out of the list to choose from beside a dataset of the file's own. The
+    voxel count is h5py's read through the link; a link whose file is
+    not there is named in the refusal."""
+    h5py = pytest.importorskip("h5py")
+    volume = np.zeros((6, 7, 8), np.uint8)
+    volume[1:4, 2:5, 3:6] = 1
+    volume[4, 5, 6] = 1
+    with h5py.File(tmp_path / "scan.h5", "w") as f:
+        f["v"] = volume
+    with h5py.File(tmp_path / "links.h5", "w") as f:
+        f["v"] = h5py.ExternalLink("scan.h5", "/v")
+    with h5py.File(tmp_path / "both.h5", "w") as f:
+        f["a"] = np.ones((3, 3, 3), np.uint8)
+        f["g/ext"] = h5py.ExternalLink("scan.h5", "/v")
+    with h5py.File(tmp_path / "dangling.h5", "w") as f:
+        f["v"] = h5py.ExternalLink("gone.h5", "/v")
+    with h5py.File(tmp_path / "links.h5") as f:
+        voxels = int(np.count_nonzero(f["v"][()]))
+
+    def isoflow_cli(*args):
+        return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True,
+                              cwd=tmp_path)
+
+    done = isoflow_cli("info", "links.h5", "--json")
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["voxels"] == voxels == 28
+    done = isoflow_cli("info", "both.h5")
+    assert done.returncode == 2 and done.stderr.strip().splitlines() == [
+        "isoflow info: error: both.h5: holds datasets /a, /g/ext; name one, e.g. both.h5:/a"], done.stderr
+    done = isoflow_cli("info", "both.h5:/g/ext", "--json")
+    assert done.returncode == 0 and json.loads(done.stdout)["voxels"] == voxels, done.stderr
+    done = isoflow_cli("info", "dangling.h5")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and "gone.h5:/v" in lines[0], done.stderr
 
 
 def test_a_dataset_written_into_an_hdf5_file_keeps_its_other_datasets(tmp_path, capsys, labels):

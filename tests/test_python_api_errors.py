@@ -1143,7 +1143,14 @@ def test_an_empty_path_is_refused_as_empty(name, tmp_path, monkeypatch):
     (lambda p: isoflow.write_volume(p, np.ones((2, 2, 2), bool)), "the object comes first: write_volume(obj, path)"),
     (lambda p: isoflow.write_labels(p, np.ones((2, 2, 2), np.uint8)), "the labels come first: write_labels(labels, path)"),
     (lambda p: isoflow.read_volume(np.load(p)), "an array in memory: DigitalObject(array)"),
-    (lambda p: isoflow.voxelize_file(trimesh_box(), resolution=4), "a mesh in memory: voxelize_mesh(mesh)"),
+    (lambda p: isoflow.voxelize_file(trimesh_box(), resolution=4), "a mesh in memory: isoflow.voxelize_mesh(mesh, resolution=N)"),
+    # getting-started.md: a mesh in memory is refused as a mesh, naming what voxelises it; a Scene and
+    # a Manifold given for a file got "path must be a str" alone, and a reader of volumes named nothing
+    (lambda p: isoflow.voxelize_file(trimesh_scene(), resolution=4), "a mesh in memory: isoflow.voxelize_mesh("),
+    (lambda p: isoflow.voxelize_file(manifold_cube(), resolution=4), "in memory: isoflow.from_manifold(manifold, pitch=P)"),
+    (lambda p: isoflow.read_volume(trimesh_box()), "a mesh in memory: isoflow.voxelize_mesh(mesh, resolution=N)"),
+    (lambda p: isoflow.read_object(trimesh_scene()), "a mesh in memory: isoflow.voxelize_mesh(mesh, resolution=N)"),
+    (lambda p: isoflow.read_volume(manifold_cube()), "in memory: isoflow.from_manifold(manifold, pitch=P)"),
 ])
 def test_a_path_given_something_else_says_what_takes_it(call, words, tmp_path):
     path = tmp_path / "v.npy"
@@ -1156,6 +1163,15 @@ def test_a_path_given_something_else_says_what_takes_it(call, words, tmp_path):
 def trimesh_box():
     trimesh = pytest.importorskip("trimesh")
     return trimesh.creation.box()
+
+
+def trimesh_scene():
+    trimesh = pytest.importorskip("trimesh")
+    return trimesh.Scene([trimesh.creation.box()])
+
+
+def manifold_cube():
+    return pytest.importorskip("manifold3d").Manifold.cube()
 
 
 @pytest.mark.parametrize("bad", [np.array(["torus.obj", "eight.off"]), None, ["torus.obj"]])

@@ -224,8 +224,7 @@ def test_hdf5_element_size_um_is_in_micrometres(tmp_path, capsys):
         assert r["unit"] is None and same(r["pitch"], PITCH)
 
 
-@pytest.mark.parametrize("units, unit", [(["mm", "mm", "mm"], "mm"), (["micron"] * 3, MICRO),
-                                         (["mm", "mm", "cm"], None)])
+@pytest.mark.parametrize("units, unit", [(["mm", "mm", "mm"], "mm"), (["micron"] * 3, MICRO)])
 def test_nrrd_unit_is_its_space_units(tmp_path, capsys, units, unit):
     nrrd = pytest.importorskip("nrrd")
     header = {"space dimension": 3, "space directions": np.diag(PITCH), "space origin": np.array([1.0, 2.0, 3.0]),
@@ -246,16 +245,85 @@ def test_nrrd_without_a_space_takes_the_units_of_its_spacings(tmp_path, capsys):
         assert r["unit"] == "nm" and same(r["pitch"], PITCH) and r["origin"] == [0, 0, 0]
 
 
-def test_nrrd_with_differing_space_units_says_so(tmp_path):
+def test_nrrd_with_space_units_isoflow_does_not_know_says_so(tmp_path):
     nrrd = pytest.importorskip("nrrd")
-    header = {"space dimension": 3, "space directions": np.diag(PITCH), "space units": ["mm", "mm", "cm"],
+    header = {"space dimension": 3, "space directions": np.diag(PITCH), "space units": ["mm", "mm", "furlong"],
               "kinds": ["domain"] * 3}
     nrrd.write(str(tmp_path / "seg.nrrd"), cube(), header, index_order="F")
     done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "seg.nrrd"), "--labels", "--json"],
                           capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["unit"] is None
-    assert "space units' differ by axis (mm, mm, cm)" in done.stderr
+    assert "space units' differ by axis (mm, mm, furlong)" in done.stderr
+
+
+def nrrd_mm_mm_cm(path) -> None:
+    """A NRRD written by pynrrd whose z is in cm, x and y in mm: voxel 0's
+    centre at (1 mm, 2 mm, 3 cm)."""
+    nrrd = pytest.importorskip("nrrd")
+    header = {"space dimension": 3, "space directions": np.diag(PITCH), "space origin": np.array([1.0, 2.0, 3.0]),
+              "space units": ["mm", "mm", "cm"], "kinds": ["domain"] * 3}
+    nrrd.write(str(path), cube(), header, index_order="F")
+    assert nrrd.read_header(str(path))["space units"] == ["mm", "mm", "cm"]
+
+
+def ome_zarr_um_um_mm(path) -> None:
+    """An NGFF 0.4 image written with zarr itself whose z axis is in
+    millimeter, y and x in micrometer: voxel 0's centre at (1 µm, 2 µm, 3 mm)."""
+    ome_zarr(path, "micrometer")
+    zarr = pytest.importorskip("zarr")
+    group = zarr.open_group(str(path), mode="a")
+    multiscales = group.attrs["multiscales"]
+    multiscales[0]["axes"][0]["unit"] = "millimeter"  # (z, stored first)
+    group.attrs["multiscales"] = multiscales
+
+
+@pytest.mark.parametrize("write, name, unit, z_factor", [(nrrd_mm_mm_cm, "seg.nrrd", "mm", 10.0),
+                                                         (ome_zarr_um_um_mm, "seg.zarr", MICRO, 1000.0)])
+def test_axes_in_different_length_units_are_read_in_the_first_axis_unit(tmp_path, write, name, unit, z_factor):
+    """A z axis in cm beside x and y in mm was read with no unit and the
+    numbers as they were (z 10 times too short): a volume and an area in no
+    unit at all, and a surface squashed along z. Each axis is converted to
+    x's unit, as an OME-TIFF's PhysicalSizeZ is: 1 cm is 10 mm, 1 mm is
+    1000 µm. The surface is read back by trimesh."""
+    trimesh = pytest.importorskip("trimesh")
+    write(tmp_path / name)
+    pitch = np.array(PITCH) * [1.0, 1.0, z_factor]
+    centre0 = np.array([1.0, 2.0, 3.0]) * [1.0, 1.0, z_factor]
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / name), "--label", "1", "--json"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    got = json.loads(done.stdout)
+    assert got["unit"] == unit and same(got["pitch"], pitch) and same(got["origin"], centre0 - pitch / 2)
+    assert np.isclose(got["volume"], np.count_nonzero(cube() == 1) * np.prod(pitch))
+    assert "differ by axis" not in done.stderr
+    done = subprocess.run([sys.executable, "-m", "isoflow", "surface", str(tmp_path / name), "--label", "1", "-o",
+                           str(tmp_path / "one.ply")], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    mesh = trimesh.load(tmp_path / "one.ply", process=False)
+    index = np.argwhere(cube() == 1)  # label 1's voxels, (x, y, z)
+    corner = centre0 - pitch / 2
+    assert same(mesh.bounds, [corner + index.min(axis=0) * pitch, corner + (index.max(axis=0) + 1) * pitch])
+    assert np.isclose(mesh.volume, np.count_nonzero(cube() == 1) * np.prod(pitch))
+
+
+@pytest.mark.parametrize("labels", [["--label", "1"], ["--labels"]])
+def test_a_unit_isoflow_does_not_know_is_said_once(tmp_path, labels):
+    """An OME-Zarr store read block by block whose z is in parsec: the
+    warning that no unit is reported came twice (the store's axes are read
+    by the report and again by the placement it prints)."""
+    ome_zarr(tmp_path / "seg.zarr", "micrometer")
+    zarr = pytest.importorskip("zarr")
+    group = zarr.open_group(str(tmp_path / "seg.zarr"), mode="a")
+    multiscales = group.attrs["multiscales"]
+    multiscales[0]["axes"][0]["unit"] = "parsec"
+    group.attrs["multiscales"] = multiscales
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "seg.zarr"), "--json", *labels],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["unit"] is None
+    said = [line for line in done.stderr.splitlines() if "differ by axis" in line]
+    assert len(said) == 1, done.stderr
 
 
 def ome_zarr(path, unit: str | None, ndim: int = 3):
@@ -312,3 +380,31 @@ def test_cli_md_says_what_the_4d_json_carries(tmp_path):
     img, got = series_json(tmp_path)
     assert not {"volume", "surface_area", "bbox", "centroid"} & set(got)
     assert got["unit"] == img.header.get_xyzt_units()[0] and len(got["pitch"]) == len(got["origin"]) == 4
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".h5"])
+@pytest.mark.parametrize("stored, unit", [(5, None), (["mm", "mm"], None), (b"mm", "mm"), ("micron", MICRO)])
+def test_a_unit_field_that_holds_no_text_is_no_unit(tmp_path, suffix, stored, unit):
+    """A ``unit`` field of a number (5) or of several strings was printed
+    as the unit ("voxel size 0.5 x 0.5 x 0.5 5", "... ['mm' 'mm']"), and
+    bytes as their repr; a field of no text is now no unit, said in one
+    warning naming the field and value, and bytes are their text."""
+    path = tmp_path / f"v{suffix}"
+    volume = (cube() == 1).astype(np.uint8)
+    if suffix == ".npz":
+        np.savez(path, volume=volume, pitch=np.array(0.5), unit=np.array(stored))
+        field = "array 'unit'"
+    else:
+        h5py = pytest.importorskip("h5py")
+        with h5py.File(path, "w") as f:
+            f.create_dataset("volume", data=volume).attrs.update({"pitch": 0.5, "unit": stored})
+        field = "attribute 'unit'"
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--json"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    got = json.loads(done.stdout)
+    assert got["unit"] == unit and same(got["pitch"], [0.5] * 3)
+    assert np.isclose(got["volume"], np.count_nonzero(volume) * 0.125)
+    warned = [line for line in done.stderr.splitlines() if "not the text of a length unit" in line]
+    assert len(warned) == (unit is None), done.stderr
+    if unit is None:
+        assert f"{field} is " in warned[0]

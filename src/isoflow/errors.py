@@ -436,6 +436,41 @@ def value_kind(value: object, width: int = 60) -> str:
     return text if text.startswith(name + "(") else f"{name} {text}"  # DigitalObject(...) names its type
 
 
+def voxeliser_of(value: object) -> str:
+    """The function that voxelises ``value`` where it is a mesh in memory,
+    for a message that refuses it where a file is taken: a triangle mesh (a
+    ``trimesh.Trimesh`` or ``Scene``) names ``voxelize_mesh``, a
+    ``manifold3d.Manifold`` ``from_manifold``; "" for anything else. A mesh
+    is known by its fields, as :func:`isoflow.scale.arrays.refuse_object`
+    knows one: this layer cannot import trimesh or manifold3d.
+
+    Parameters
+    ----------
+    value : object
+        Anything given where a file is taken.
+
+    Returns
+    -------
+    str
+        ``a mesh in memory: ...`` or ``a manifold3d.Manifold in memory:
+        ...``, or "".
+
+    Examples
+    --------
+    >>> class Scene:  # a trimesh.Scene's fields
+    ...     graph = geometry = to_mesh = None
+    >>> voxeliser_of(Scene()), voxeliser_of("torus.obj")
+    ('a mesh in memory: isoflow.voxelize_mesh(mesh, resolution=N)', '')
+    """
+    if type(value).__name__ == "Manifold" and hasattr(value, "to_mesh"):
+        return "a manifold3d.Manifold in memory: isoflow.from_manifold(manifold, pitch=P)"
+    scene = all(hasattr(value, name) for name in ("graph", "geometry", "to_mesh"))
+    faces = getattr(value, "faces", None)
+    if scene or (hasattr(value, "vertices") and getattr(faces, "shape", (0, 0))[1:] == (3,)):
+        return "a mesh in memory: isoflow.voxelize_mesh(mesh, resolution=N)"
+    return ""
+
+
 def check_path(value: object, name: str, where: str, array_hint: str = "", hint: str = "") -> str | os.PathLike:
     """Refuse, before any work, a path that is not a str or os.PathLike (the
     arguments swapped, an array or a mesh where its file is taken, None):
@@ -456,7 +491,9 @@ def check_path(value: object, name: str, where: str, array_hint: str = "", hint:
         The function, for the message.
     array_hint : str, optional
         What takes an array, said where ``value`` is one (its shape is
-        said): a volume in memory given to a reader of files.
+        said): a volume in memory given to a reader of files. Where it is
+        given, a mesh in memory is refused naming what voxelises it
+        (:func:`voxeliser_of`).
     hint : str, optional
         What to do instead, said whatever ``value`` is.
 
@@ -487,6 +524,8 @@ def check_path(value: object, name: str, where: str, array_hint: str = "", hint:
     if not isinstance(value, (str, os.PathLike)):
         if array_hint and isinstance(getattr(value, "shape", None), tuple):
             hint = array_hint
+        elif array_hint and voxeliser_of(value):  # a reader of volumes given a mesh, as analyze() names it
+            hint = voxeliser_of(value)
         raise NotAPath(f"{where}: {name} must be a str or os.PathLike, got {value_kind(value)}"
                        + (f"; {hint}" if hint else ""))
     refuse_empty_path(value, f"{where}: {name}")

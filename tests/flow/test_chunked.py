@@ -880,5 +880,7 @@ def test_command_threads_must_be_a_positive_integer(tmp_path, capsys, bad):
               bad])
     assert refused.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"isoflow flow: error: argument --threads: N must be a positive integer, got '{bad}'"]
+    # said as argparse says the other counts: the value, not the help's name N for it
+    said = f"must be 1 or more, got {bad}" if bad.lstrip("-").isdigit() else f"not a whole number of threads: '{bad}'"
+    assert err == [f"isoflow flow: error: argument --threads: {said}"]
     assert not (tmp_path / "run").exists()

@@ -135,6 +135,29 @@ def test_written_files_equal_the_in_memory_files(tmp_path, rng, conn):
             assert key(a) == key(b)
 
 
+@pytest.mark.parametrize("conn", [6, 26])
+def test_the_files_record_their_connectivity_for_genus(tmp_path, conn):
+    """surface.md gives write_surface_blocks(...) from Python; its PLY had
+    no record of who wrote it at which connectivity (the STL's header had
+    one, and the command passes its own comments), so ``isoflow genus`` read
+    a 26-connected PLY at 6, as another program's file. Both files now
+    record it, and genus, run as a user runs it, reads each at it."""
+    import json
+    import subprocess
+
+    v = torus(6, 2, size=17, axis=1)
+    array = zarr.open_array(str(store(tmp_path, v)), mode="r")
+    for suffix in (".ply", ".stl"):
+        path = write_surface_blocks(array, tmp_path / f"s{suffix}", conn)["path"]
+        run = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(path), "--resolution", "16", "32",
+                              "--no-step", "--json", "-q"], capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+        assert {row["connectivity"] for row in json.loads(run.stdout)["digital"]} == {conn}, suffix
+    header = (tmp_path / "s.ply").read_bytes().split(b"end_header")[0].decode()
+    assert f"comment isoflow write_surface_blocks, {conn}-connectivity" in header.splitlines()
+    assert f"comment {export.VERTEX_COMMENT}" in header.splitlines()
+
+
 def test_dask_array_and_block_shapes(tmp_path, rng):
     da = pytest.importorskip("dask.array")
     v = seam_volume(rng)

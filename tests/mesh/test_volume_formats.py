@@ -611,6 +611,28 @@ def test_hdf5_from_h5py_with_element_size(tmp_path, vol):
         isoflow.read_volume(tmp_path / "d.h5")
 
 
+def test_hdf5_volume_beside_scalars_and_lists_is_read(tmp_path, vol):
+    """A file holding one 3D array beside a name (a scalar string) and a
+    voxel size (a list), as acquisition software writes them, was refused
+    as holding several datasets, suggesting the scalar string
+    (``e.g. f.h5:/name``). The one array of 2 to 4 axes is read (h5py's
+    own read of it the reference); of two such arrays the suggestion names
+    an array."""
+    h5py = pytest.importorskip("h5py")
+    with h5py.File(tmp_path / "f.h5", "w") as f:
+        f["a_name"] = "scan 1"
+        f["spacing"] = np.array([1.0, 0.5, 0.5])
+        f["data/image"] = vol.astype(np.uint8)
+    with h5py.File(tmp_path / "f.h5") as f:
+        stored = f["data/image"][()]
+    assert np.array_equal(isoflow.read_volume(tmp_path / "f.h5").volume, stored.astype(bool))
+    with h5py.File(tmp_path / "f.h5", "a") as f:
+        f["other"] = vol.astype(np.uint8)
+    with pytest.raises(IsoflowError, match="holds datasets /a_name, /data/image, /other, /spacing; name one, "
+                                           "e.g. .*f.h5:/data/image$"):
+        isoflow.read_volume(tmp_path / "f.h5")
+
+
 @pytest.mark.parametrize("size", [[1.0, 0.5], [0.0, 1.0, 1.0], [b"x", b"y", b"z"]])
 def test_hdf5_element_size_that_is_no_voxel_size_is_named(tmp_path, vol, size):
     """The refusal names the file's attribute and value, not isoflow's

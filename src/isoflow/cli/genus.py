@@ -6,8 +6,8 @@ import argparse
 import json
 import sys
 
-from ..errors import IsoflowError, betti_words, counted, number_text, terminal_text
-from .inputs import add_mesh_rule, mesh_fill, resolution_value
+from ..errors import betti_words, counted, terminal_text
+from .inputs import add_mesh_rule, mesh_fill, resolution_value, seconds_value
 from .progress import progress_bar
 
 
@@ -20,7 +20,7 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
                         "then doubled until the digital Betti numbers of the last two agree")
     p.add_argument("--max-resolution", type=resolution_value,
                    help="stop doubling beyond this (default 1024); the resolutions given are tried whatever it says")
-    p.add_argument("--time-limit", type=float, metavar="SECONDS",
+    p.add_argument("--time-limit", type=seconds_value, metavar="SECONDS",
                    help="stop doubling when the next resolution would end past this (default 60)")
     p.add_argument("--no-step", action="store_true", help="only the resolutions given, no doubling")
     add_mesh_rule(p)
@@ -30,17 +30,9 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.set_defaults(func=cmd_genus)
 
 
-def check_limits(args: argparse.Namespace) -> None:
-    """The time limit is positive, or one line says so (the resolutions are
-    checked as the command line is read: :func:`resolution_value`)."""
-    if args.time_limit is not None and not args.time_limit > 0:
-        raise IsoflowError(f"--time-limit must be a positive number of seconds, got {number_text(args.time_limit)}")
-
-
 def cmd_genus(args: argparse.Namespace) -> int:
     from ..mesh.genus import DEFAULT_RESOLUTIONS, verify_genus
 
-    check_limits(args)
     res = args.resolution or list(DEFAULT_RESOLUTIONS)
     kw = {k: v for k, v in (("max_resolution", args.max_resolution), ("time_limit", args.time_limit)) if v is not None}
     with progress_bar(args, "genus") as show:

@@ -76,7 +76,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     channel = args.label is not None
     if split_dataset(args.input)[0].suffix.lower() == ".zarr" and stored_ndim(args.input, channel) in (2, 3):
         report = info_of_store(args)
-        placed: dict | None = store_placement(args.input, channel)
+        placed: dict | None = store_placement(args.input, report.unit, channel)
     else:
         report, grid, placed = info_in_memory(args)
     if args.json:
@@ -105,10 +105,12 @@ def calibration(obj, unit: str | None, dtype) -> dict:
             "origin": [float(c) + 0.0 for c in corner], "unit": unit, "space": obj.space}
 
 
-def store_placement(path, channel: bool = False) -> dict:
+def store_placement(path, unit: str | None, channel: bool = False) -> dict:
     """:func:`calibration` of a zarr store read block by block, from its
-    metadata (the volume is not read); ``channel`` as
-    :func:`~isoflow.mesh.formats.omezarr.open_store` takes it."""
+    metadata (the volume is not read); ``unit`` as the report found it
+    (read from the axes again, a warning about them would be said twice);
+    ``channel`` as :func:`~isoflow.mesh.formats.omezarr.open_store` takes
+    it."""
     from ..digital.lattice import DigitalObject
     from ..mesh.formats.omezarr import open_store
 
@@ -118,7 +120,7 @@ def store_placement(path, channel: bool = False) -> dict:
         place = DigitalObject.placement(len(store.xyz), pitch=pitch, origin=origin)
     except IsoflowError as exc:
         raise exc.at(path) from None
-    return calibration(place, store.unit(), store.array.dtype)
+    return calibration(place, unit, store.array.dtype)
 
 
 def info_of_store(args: argparse.Namespace) -> Report:

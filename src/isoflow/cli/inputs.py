@@ -172,13 +172,35 @@ def pitch_value(text: str) -> float:
 
 
 def thread_count(text: str) -> int:
-    """argparse type of ``--threads``: a positive integer."""
-    from ..scale.compiled import check_threads
+    """argparse type of ``--threads``: a whole number of threads, 1 or
+    more, said as argparse says the other counts (not "N must be ...": N is
+    only the help's name for the value).
 
+    Examples
+    --------
+    >>> thread_count("4")
+    4
+    """
+    return whole_number(text, "threads", 1)
+
+
+def seconds_value(text: str) -> float:
+    """argparse type of ``genus --time-limit``: a positive number of
+    seconds (``inf``: no limit), refused as the command line is read, the
+    number as it was typed.
+
+    Examples
+    --------
+    >>> seconds_value("2.5")
+    2.5
+    """
     try:
-        return check_threads(text, "N")
-    except IsoflowError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be a positive number of seconds, got {text}")
+    return value
 
 
 def say_note(args: argparse.Namespace, path: object, note: str | None, why: bool = False) -> None:

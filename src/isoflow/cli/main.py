@@ -364,19 +364,23 @@ def warnings_as_lines(args: argparse.Namespace) -> Iterator[None]:
     without the source line Python adds; others as Python shows them.
     --quiet drops the notes and other libraries' warnings, not isoflow's
     warnings: each says the result differs from what was asked (a voxel
-    size a format cannot keep, a rotation left out)."""
+    size a format cannot keep, a rotation left out). A line said once is not
+    said again."""
     import warnings
 
     from ..errors import IsoflowWarning, MeshNote
 
     with warnings.catch_warnings():
         shown = warnings.showwarning
+        said: set[str] = set()  # (a file's metadata read twice, by two passes, says the same line once)
 
         def show(message, category, filename, lineno, file=None, line=None):
-            if issubclass(category, MeshNote):
-                print(f"isoflow {args.command}: note: {terminal_text(str(message))}", file=sys.stderr)
-            elif issubclass(category, IsoflowWarning):
-                print(f"isoflow {args.command}: warning: {terminal_text(str(message))}", file=sys.stderr)
+            if issubclass(category, IsoflowWarning):
+                text = (f"isoflow {args.command}: {'note' if issubclass(category, MeshNote) else 'warning'}: "
+                        f"{terminal_text(str(message))}")
+                if text not in said:
+                    said.add(text)
+                    print(text, file=sys.stderr)
             else:
                 shown(message, category, filename, lineno, file, line)
 

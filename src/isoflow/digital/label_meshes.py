@@ -182,30 +182,40 @@ def _batch(image, labels, lo, extent, rows: list[int], shape: tuple[int, int, in
     # a vertex's box: that of its lattice layer (a box's last layer is its
     # own, the empty layer after it has no vertex; a midpoint lies within)
     slot_of_layer = np.repeat(np.arange(len(rows)), np.diff(starts))
-    slot = slot_of_layer[np.floor(mesh.vertices[:, 0]).astype(np.int64)]
-    if len(slot) and (slot[1:] >= slot[:-1]).all():
-        # the compiled passes give the vertices layer by layer, so part by part already
-        new_index, vslot = np.arange(len(slot)), slot  # (vslot: each new vertex's part)
-        vertices, config, sheet = mesh.vertices.copy(), mesh.config, mesh.sheet
-    else:
-        vorder = np.argsort(slot, kind="stable")
-        new_index = np.empty(len(vorder), np.int64)
-        new_index[vorder] = np.arange(len(vorder))
-        vertices, config, sheet = mesh.vertices[vorder], mesh.config[vorder], mesh.sheet[vorder]
-        vslot = slot[vorder]
+    slot = slot_of_layer[mesh.vertices[:, 0].astype(np.int64)]  # (coordinates >= 0: truncation is the floor)
+    in_order = not len(slot) or bool((slot[1:] >= slot[:-1]).all())
+    # the compiled passes give the vertices layer by layer, so part by part
+    # already (and the mesh is this call's own: its vertices are moved in place)
+    vorder = None if in_order else np.argsort(slot, kind="stable")
+    vertices, config, sheet = (mesh.vertices if mesh.vertices.flags.writeable else mesh.vertices.copy(),
+                               mesh.config, mesh.sheet) if in_order else \
+        (mesh.vertices[vorder], mesh.config[vorder], mesh.sheet[vorder])
+    vslot = slot if in_order else slot[vorder]  # each new vertex's part
     vfirst = np.searchsorted(vslot, np.arange(len(rows) + 1))
     face_slot = slot[mesh.faces[:, 0]]
-    forder = np.argsort(face_slot, kind="stable")
-    ffirst = np.searchsorted(face_slot[forder], np.arange(len(rows) + 1))
+    faces, midpoint, normals = mesh.faces, mesh.edge_midpoint, mesh.face_normals
+    if len(face_slot) and not (face_slot[1:] >= face_slot[:-1]).all():
+        forder = np.argsort(face_slot, kind="stable")
+        faces, midpoint, normals, face_slot = faces[forder], midpoint[forder], normals[forder], face_slot[forder]
+    ffirst = np.searchsorted(face_slot, np.arange(len(rows) + 1))
     # every part's arrays at once, in its box's units and numbering
     vertices[:, 0] -= starts[vslot]
     idx = index_dtype(int(np.diff(vfirst).max(initial=0)))
-    local = new_index - vfirst[slot]  # each vertex's number within its part
-    midpoint = mesh.edge_midpoint[forder]
-    lone = (pinch_lut(connectivity)[config].astype(bool) & (sheet == 0)).astype(np.int64)
-    return Batch(rows=rows, masks=masks, vertices=vertices, config=config, sheet=sheet,
-                 faces=local[mesh.faces[forder]].astype(idx),
-                 edge_midpoint=np.where(midpoint >= 0, local[np.maximum(midpoint, 0)], -1).astype(idx),
-                 face_normals=mesh.face_normals[forder], vfirst=vfirst, ffirst=ffirst,
-                 pinched=np.add.reduceat(lone, vfirst[:-1]) if len(lone) else np.zeros(len(rows), np.int64),
+    if in_order:
+        # a face's vertices and midpoints all lie in its own part, so its
+        # numbers within the part are the batch's less the part's first
+        first = vfirst[face_slot].astype(faces.dtype)[:, None]
+        faces = (faces - first).astype(idx, copy=False)
+        midpoint = np.where(midpoint >= 0, midpoint - first, -1).astype(idx, copy=False)
+    else:
+        new_index = np.empty(len(vorder), np.int64)
+        new_index[vorder] = np.arange(len(vorder))
+        local = new_index - vfirst[slot]  # each vertex's number within its part
+        faces = local[faces].astype(idx)
+        midpoint = np.where(midpoint >= 0, local[np.maximum(midpoint, 0)], -1).astype(idx)
+    # vertex contacts the split mesh separates (few): counted per part
+    lone = np.flatnonzero(pinch_lut(connectivity)[config] & (sheet == 0))
+    return Batch(rows=rows, masks=masks, vertices=vertices, config=config, sheet=sheet, faces=faces,
+                 edge_midpoint=midpoint, face_normals=normals, vfirst=vfirst, ffirst=ffirst,
+                 pinched=np.bincount(vslot[lone], minlength=len(rows)),
                  connectivity=connectivity)

@@ -407,21 +407,36 @@ def triangle_rows(faces: np.ndarray, edge_midpoint: np.ndarray) -> tuple[np.ndar
     >>> tris.tolist(), face.tolist()
     ([[0, 1, 2], [0, 2, 3]], [0, 0])
     """
-    plain = (edge_midpoint < 0).all(axis=1)
-    q = faces[plain]
-    tris = [np.stack([q[:, [0, 1, 2]], q[:, [0, 2, 3]]], axis=1).reshape(-1, 3)]
-    owner = [np.repeat(np.flatnonzero(plain), 2)]
-    if not plain.all():
-        split = np.flatnonzero(~plain)
+    # the faces with a midpoint (few): one comparison over the flat array,
+    # not a reduction along each short row
+    split = np.unique(np.flatnonzero(np.ravel(edge_midpoint) >= 0) // 4)
+    fans: list[tuple[np.ndarray, np.ndarray]] = []
+    if len(split):
         seq = polygon_rows(faces[split], edge_midpoint[split])
         count = (seq >= 0).sum(axis=1)
         for size in np.unique(count):
             grp = seq[count == size]
             poly = grp[grp >= 0].reshape(len(grp), size)  # drop the -1 slots, keeping order
-            for t in range(1, size - 1):
-                tris.append(poly[:, [0, t, t + 1]])
-                owner.append(split[count == size])
-    return np.concatenate(tris), np.concatenate(owner)
+            fans += [(poly[:, [0, t, t + 1]], split[count == size]) for t in range(1, size - 1)]
+    plain = len(faces) - len(split)
+    # every array written once, in place: fresh pages cost more than the copies
+    triangles = np.empty((2 * plain + sum(len(f) for f, _ in fans), 3), faces.dtype)
+    face = np.empty(len(triangles), np.int64)
+    if len(split):
+        kept = np.ones(len(faces), bool)
+        kept[split] = False
+        kept = np.flatnonzero(kept)
+        quads = np.take(faces, kept, axis=0)  # (rows by index: a boolean row mask reads slower)
+    else:
+        kept, quads = np.arange(len(faces)), faces
+    # (0, 1, 2) and (0, 2, 3) of each quad ("clip": the columns are in range, and it writes unbuffered)
+    np.take(quads, [0, 1, 2, 0, 2, 3], axis=1, out=triangles[:2 * plain].reshape(plain, 6), mode="clip")
+    face[:2 * plain].reshape(plain, 2)[:] = kept[:, None]
+    at = 2 * plain
+    for tri, owner in fans:
+        triangles[at:at + len(tri)], face[at:at + len(tri)] = tri, owner
+        at += len(tri)
+    return triangles, face
 
 
 def _vertex_components(polygons: np.ndarray, nv: int) -> tuple[int, np.ndarray]:

@@ -30,6 +30,11 @@ LENGTH_UNITS = {
     "yd": ("yd", "yard", "yards"),
     "mi": ("mi", "mile", "miles"),
 }
+#: picometres per length unit of :data:`LENGTH_UNITS`, each a whole number
+#: that float64 holds exactly, so that the ratio of two (1000 from mm to
+#: µm) is the float nearest the true one
+PICOMETRES = {"m": 1e12, "cm": 1e10, "mm": 1e9, "\u00b5m": 1e6, "nm": 1e3, "pm": 1.0, "\u00c5": 1e2, "km": 1e15,
+              "in": 2.54e10, "ft": 3.048e11, "yd": 9.144e11, "mi": 1.609344e15}
 #: what the formats write for "no unit": NIfTI's "unknown", ImageJ's
 #: "pixel" (an uncalibrated image), NRRD's "???"
 NO_UNIT = ("", "unknown", "pixel", "pixels", "voxel", "voxels", "none", "???")
@@ -97,3 +102,24 @@ def unit_given(unit: object, where: str) -> str | None:
                            "spelling of length_unit)")
     return spelled
 
+
+def unit_factor(unit: str, into: str) -> float:
+    """How many of ``into`` one ``unit`` is, both in isoflow's spelling
+    (:data:`LENGTH_UNITS`): the factor that turns a length in ``unit`` into
+    one in ``into``.
+
+    Parameters
+    ----------
+    unit, into : str
+        Two of :data:`LENGTH_UNITS`.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> unit_factor("mm", "\u00b5m"), unit_factor("cm", "mm"), unit_factor("in", "mm")
+    (1000.0, 10.0, 25.4)
+    """
+    return PICOMETRES[unit] / PICOMETRES[into]

@@ -224,12 +224,17 @@ def mesh_vertex_table(mesh, obj: DigitalObject, position=None) -> dict[str, np.n
 def vertex_columns(mesh, xyz: np.ndarray, position) -> dict[str, np.ndarray]:
     """The columns of :func:`mesh_vertex_table` from the vertices' world
     positions ``xyz``, stored as ``position``."""
+    return {"x": xyz[:, 0].astype(position), "y": xyz[:, 1].astype(position), "z": xyz[:, 2].astype(position),
+            **curvature_columns(mesh)}
+
+
+def curvature_columns(mesh) -> dict[str, np.ndarray]:
+    """The per-vertex columns of :func:`mesh_vertex_table` after the
+    position: configuration, class, gamma, a, f and the colour of gamma
+    (:func:`gamma_colours`)."""
     cls = mesh.vertex_class
     rgb = gamma_colours(mesh.gamma, cls)
     return {
-        "x": xyz[:, 0].astype(position),
-        "y": xyz[:, 1].astype(position),
-        "z": xyz[:, 2].astype(position),
         "config": mesh.config.astype(np.uint8),
         "class": cls.astype(np.int8),
         "gamma": mesh.gamma.astype(np.int8),
@@ -610,23 +615,26 @@ def batch_glb_parts(batch: Batch, names: list[str], offsets: np.ndarray, spacing
     corner = np.asarray(offsets, np.float64)[batch.rows]
     of_vertex = np.repeat(np.arange(parts), np.diff(batch.vfirst))
     xyz = origin + spacing * (np.asarray(mesh.vertices, float) + corner[of_vertex])  # as DigitalObject.world
-    held = float32_held(xyz, spacing).all(axis=1)
-    holds = np.logical_and.reduceat(held, batch.vfirst[:-1]) if len(xyz) else np.ones(parts, bool)
     # a part past float32's range casts to inf here, and is framed below:
     # its positions replaced by voxel units, not a NumPy warning on the terminal
-    with np.errstate(over="ignore"):
-        table = vertex_columns(mesh, xyz, np.float32)
-    positions = np.column_stack([table["x"], table["y"], table["z"]])
+    with np.errstate(over="ignore", invalid="ignore"):
+        positions = xyz.astype(np.float32)
+        # as float32_held, on the one cast the file keeps
+        held = (np.abs(positions - xyz) <= POSITION_TOLERANCE * spacing).all(axis=1)
+    holds = np.logical_and.reduceat(held, batch.vfirst[:-1]) if len(xyz) else np.ones(parts, bool)
+    table = curvature_columns(mesh)
     framed = np.flatnonzero(~holds)
     if len(framed):
         in_frame = ~holds[of_vertex]
         positions[in_frame] = mesh.vertices[in_frame]
     triangles, face = triangle_rows(mesh.faces, mesh.edge_midpoint)
     of_face = np.repeat(np.arange(parts), np.diff(batch.ffirst))[face]
-    order = np.argsort(of_face, kind="stable")  # a part's triangles in the order of its own triangle_rows
+    if len(of_face) and not (of_face[1:] >= of_face[:-1]).all():  # the fans of faces with midpoints come last
+        order = np.argsort(of_face, kind="stable")  # a part's triangles in the order of its own triangle_rows
+        triangles, of_face = triangles[order], of_face[order]
     return SceneParts(names=[names[t] for t in batch.rows], positions=positions, colors=_rgba(table),
                       attributes=_glb_attributes(table), vfirst=np.asarray(batch.vfirst, np.int64),
-                      triangles=triangles[order], tfirst=np.searchsorted(of_face[order], np.arange(parts + 1)),
+                      triangles=triangles, tfirst=np.searchsorted(of_face, np.arange(parts + 1)),
                       matrices={int(s): grid_transform(spacing, origin + spacing * corner[s]) for s in framed},
                       extras={s: {"name": label_names[t]} for s, t in enumerate(batch.rows)
                               if label_names is not None and label_names[t]})

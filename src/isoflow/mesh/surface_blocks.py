@@ -51,7 +51,16 @@ from ..scale.arrays import NotBinary, binary, fill_value_named, index_dtype
 from ..scale.chunkcache import ChunkReader
 from ..scale.chunks import BlockTicks, decoded_chunk_voxels, is_zarr_array, smaller_blocks_help
 from ..scale.compiled import using
-from .export import STL_DTYPE, float32_holds, mesh_vertex_table, ply_header, shared_positions, space_tag, stl_header
+from .export import (
+    STL_DTYPE,
+    VERTEX_COMMENT,
+    float32_holds,
+    mesh_vertex_table,
+    ply_header,
+    shared_positions,
+    space_tag,
+    stl_header,
+)
 
 #: the suffixes whose files are written block by block
 STREAM_SUFFIXES = (".ply", ".stl")
@@ -631,7 +640,10 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     where : str, optional
         The input's name in messages.
     comments : tuple of str
-        PLY header comments.
+        PLY header comments; by default ``isoflow write_surface_blocks,
+        N-connectivity`` and the per-vertex columns, as :func:`write_surface`
+        records them (``isoflow genus`` reads the file at that connectivity;
+        an STL's header records it always).
     triangulate : bool
         Triangles in a PLY too (an STL always holds triangles; a PLY holds
         them anyway where a face has midpoints, as binary PLY readers need
@@ -675,6 +687,8 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     if len(array.shape) != 3:
         raise IsoflowError(f"{where}: surface needs a 3D volume, this one has shape {tuple(array.shape)}")
     conn = resolve_connectivity(3, connectivity)
+    # the record genus reads the connectivity from, as write_surface's file and the STL's header have it
+    comments = comments or (f"isoflow write_surface_blocks, {conn}-connectivity", VERTEX_COMMENT)
     if 0 in array.shape:  # no blocks to lay out: the in-memory refusal, before the grid is sized
         raise EmptySurface(f"{where}: the object is empty (shape {tuple(array.shape)}), there is no surface to write")
     frame = frame or DigitalObject.placement(3)

@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, MeshNote, check_callable, check_path, check_switch, counted, given_text, warn
+from ..errors import IsoflowError, MeshNote, check_callable, check_path, check_switch, counted, given_text, voxeliser_of, warn
 from ..scale import memory
 from .fills import (
     NO_AREA,
@@ -1068,8 +1068,10 @@ def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolu
     >>> max(obj.volume.shape), betti_numbers(obj.volume)
     (32, [1, 1, 0])
     """
-    in_memory = hasattr(path, "vertices") or isinstance(path, tuple)  # a trimesh, or (vertices, faces)
-    path = check_path(path, "path", "voxelize_file", hint="a mesh in memory: voxelize_mesh(mesh)" if in_memory else "")
+    # a trimesh, a Scene or a manifold3d.Manifold, or (vertices, faces): what voxelises each is named
+    in_memory = voxeliser_of(path) or ("a mesh in memory: isoflow.voxelize_mesh(mesh, resolution=N)"
+                                       if isinstance(path, tuple) or hasattr(path, "vertices") else "")
+    path = check_path(path, "path", "voxelize_file", hint=in_memory)
     check_strict(strict)  # before the file is read, as the other arguments are checked by voxelize
     details = check_switch(details, "details", "voxelize")
     v, f = load_mesh(path)

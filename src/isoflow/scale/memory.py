@@ -10,28 +10,134 @@ the kernel says is available when the job starts.
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import DTypeLike
 
 from ..errors import IsoflowError, given_text
 
+#: where Linux says what memory this process may use: its own files, and
+#: the control groups' (both are paths so that a test can give others)
+PROC_SELF = Path("/proc/self")
+MEMINFO = Path("/proc/meminfo")
+CGROUPS = Path("/sys/fs/cgroup")
+
 
 def default_budget() -> int:
-    """90 % of the memory the kernel reports as available now (MemAvailable:
-    free plus reclaimable cache); half the physical memory where that cannot
-    be read, 4 GiB where neither can."""
+    """90 % of the least room Linux leaves this process now: the memory
+    available (MemAvailable: free plus reclaimable cache); its control
+    group's limit less what the group holds, each group up to the root
+    (:func:`cgroup_room`: a container's limit, a batch job's as Slurm sets
+    it, which MemAvailable, the whole machine's, does not see: work past
+    it is killed without a word). Half the physical memory where
+    MemAvailable cannot be read, 4 GiB where that cannot be either. (An
+    address-space limit, ``ulimit -v``, is left to the allocation that
+    fails: it raises MemoryError, said in one line, and the address space
+    held counts reservations no job fills.)
+
+    Returns
+    -------
+    int
+        Bytes.
+
+    Examples
+    --------
+    >>> 0 < default_budget() <= 0.9 * meminfo_available()
+    True
+    """
+    available, group = meminfo_available(), cgroup_room()
+    budgets = [room * 9 // 10 for room in (available, group) if room is not None]
+    if available is None:
+        try:
+            budgets.append(int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")) // 2)
+        except (ValueError, OSError, AttributeError):
+            budgets.append(4 << 30)
+    return max(0, min(budgets))
+
+
+def meminfo_available() -> int | None:
+    """The machine's MemAvailable in bytes (free plus reclaimable cache),
+    None where ``/proc/meminfo`` cannot be read."""
     try:
-        with open("/proc/meminfo") as fh:
+        with open(MEMINFO) as fh:
             for line in fh:
                 if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024 * 9 // 10
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def cgroup_room() -> int | None:
+    """The bytes this process's memory control groups have left: at each
+    group from the process's own to the root of its hierarchy, the limit
+    less the usage short of the inactive file cache the kernel reclaims
+    before it kills (cgroup v2: ``memory.max``, ``memory.current``; v1:
+    ``memory.limit_in_bytes``, ``memory.usage_in_bytes``), the least of
+    them; None where no group sets a limit (or none can be read).
+
+    Returns
+    -------
+    int or None
+    """
+    try:
+        lines = (PROC_SELF / "cgroup").read_text().splitlines()
+    except OSError:
+        return None
+    rooms = []
+    for line in lines:
+        parts = line.split(":", 2)
+        if len(parts) != 3:
+            continue
+        _, controllers, group = parts
+        if controllers == "":  # v2 (mounted at the root, or beside v1 as "unified")
+            places = [(CGROUPS, "memory.max", "memory.current", "inactive_file"),
+                      (CGROUPS / "unified", "memory.max", "memory.current", "inactive_file")]
+        elif "memory" in controllers.split(","):
+            places = [(CGROUPS / "memory", "memory.limit_in_bytes", "memory.usage_in_bytes", "total_inactive_file")]
+        else:
+            continue
+        for root, limit_file, usage_file, cache_key in places:
+            for folder in _groups_up(root, group):
+                limit = _read_bytes(folder / limit_file)
+                if limit is None or limit >= 1 << 60:  # "max", or v1's page-rounded 2^63: no limit
+                    continue
+                usage = _read_bytes(folder / usage_file) or 0
+                rooms.append(limit - max(0, usage - _stat_value(folder / "memory.stat", cache_key)))
+    return min(rooms) if rooms else None
+
+
+def _groups_up(root: Path, group: str):
+    """The folders of a control group and of each group above it, to the
+    hierarchy's root (a container sees its own group as the root: the
+    path ``/proc`` gives may then not be there under ``root``)."""
+    folder = root / group.strip("/")
+    while True:
+        if folder.is_dir():
+            yield folder
+        if folder == root or root not in folder.parents:
+            return
+        folder = folder.parent
+
+
+def _read_bytes(path: Path) -> int | None:
+    try:
+        text = path.read_text().strip()
+    except OSError:
+        return None
+    return int(text) if text.isdigit() else None
+
+
+def _stat_value(path: Path, key: str) -> int:
+    try:
+        for line in path.read_text().splitlines():
+            name, _, value = line.partition(" ")
+            if name == key and value.strip().isdigit():
+                return int(value)
     except OSError:
         pass
-    try:
-        return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")) // 2
-    except (ValueError, OSError, AttributeError):
-        return 4 << 30
+    return 0
 
 
 def budget_of(max_bytes: object, where: str = "voxelize") -> int:

@@ -1,8 +1,13 @@
 """HDF5, ``FILE.h5:/path/to/dataset`` (h5py).
 
 Axes: the dataset's axes as stored (C order), axis 0 being x, as for
-``.npy``. Without a dataset path the file must hold one dataset, or one
-named ``volume``; otherwise the error lists the datasets to choose from.
+``.npy``. Without a dataset path the file must hold one dataset, one
+named ``volume``, or one of 2 to 4 axes beside datasets of fewer (a name,
+a voxel size); otherwise the error lists the datasets to choose from
+(a dataset an external link names among them). A dataset whose axes
+vigra's ``axistags`` attribute names (ilastik's exports) is read by them
+(:func:`tagged_axes`): a channel axis of one entry dropped, of several
+refused.
 
 Metadata: isoflow writes the attributes ``pitch`` (one number, or one per
 axis), ``origin``, ``offset`` and ``parity`` on the dataset and reads them
@@ -45,11 +50,11 @@ from .registry import (
     RawVolume,
     check_shape,
     import_library,
-    length_unit,
     names_from_json,
     names_json,
     reading,
     stored_values,
+    unit_field,
 )
 
 DEFAULT_DATASET = "volume"
@@ -67,21 +72,89 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     where = str(path) if dataset is None else f"{path}:{dataset}"
     with reading(path, "HDF5"), h5py.File(path, "r") as f:
         ds = f[_choose(f, h5py, path, dataset)]
-        check_shape(ds.shape, ds.dtype, where)
-        array = ds[()]
         attrs = dict(ds.attrs)
+        stored = ds.shape
+        index, kept, time = tagged_axes(attrs.get("axistags"), stored, where)
+        check_shape([stored[i] for i in kept], ds.dtype, where)
+        array = ds[index] if index else ds[()]
+    if time is not None:  # (x, y, z, t), as a 4D volume is read
+        array = np.moveaxis(array, time, -1)
+        kept = kept[:time] + kept[time + 1:] + [kept[time]]
     pitch = attrs.get("pitch", attrs.get("element_size_um", 1.0))
     if "pitch" not in attrs and "element_size_um" in attrs:
+        if index and np.ndim(pitch) == 1 and len(pitch) == len(stored):  # one per stored axis: those read
+            pitch = np.asarray(pitch)[kept]
         pitch = _element_size(pitch, np.ndim(array), where)
     offset = attrs.get("offset")
     # element_size_um is in micrometres by its name; isoflow's own pitch has its unit beside it, if any
     unit = "\u00b5m" if "pitch" not in attrs and "element_size_um" in attrs else None
     if "unit" in attrs:
-        unit = length_unit(attrs["unit"])
+        unit = unit_field(attrs["unit"], f"{where}: attribute 'unit'")
     names = names_from_json(attrs["label_names"], where, "attribute 'label_names'") if "label_names" in attrs else None
     space = space_given(str(attrs["space"]), f"{where}: attribute 'space'") if "space" in attrs else None
     return RawVolume(np.asarray(array), pitch, attrs.get("origin"), offset, attrs.get("parity", 0), unit=unit,
                      space=space, names=names)
+
+
+def tagged_axes(tags: object, shape: tuple[int, ...], where: str) -> tuple[tuple, list[int], int | None]:
+    """How to read a dataset whose ``axistags`` attribute (vigra's JSON, as
+    ilastik writes its exports, ``exported_data`` of z, y, x, c) names its
+    axes: a channel axis ``c`` of one entry (or a time axis ``t``) is
+    dropped, as an OME-Zarr image's and a TIFF's are; one of several
+    entries is refused, as theirs are, rather than read as a fourth
+    spatial or time axis; a time axis of several entries beside three
+    other axes becomes the last (isoflow's x, y, z, t), and beside fewer is
+    refused. The other axes stay as stored (axis 0 is x, as for any
+    dataset). Without such an attribute (or one that does not fit the
+    shape) every axis is read as stored.
+
+    Parameters
+    ----------
+    tags : object
+        The attribute as h5py gives it (str or bytes), or None.
+    shape : tuple of int
+        The dataset's shape.
+    where : str
+        The dataset, as refusals name it.
+
+    Returns
+    -------
+    index : tuple
+        What to read the dataset by (``()``: the whole as stored).
+    kept : list of int
+        The stored axes read, in stored order.
+    time : int or None
+        The position among them of a time axis to move last.
+
+    Examples
+    --------
+    >>> tags = '{"axes": [{"key": "z"}, {"key": "y"}, {"key": "x"}, {"key": "c"}]}'
+    >>> tagged_axes(tags, (8, 7, 6, 1), "a.h5")
+    ((slice(None, None, None), slice(None, None, None), slice(None, None, None), 0), [0, 1, 2], None)
+    >>> tagged_axes(None, (8, 7, 6, 1), "a.h5")
+    ((), [0, 1, 2, 3], None)
+    """
+    import json
+
+    try:
+        axes = json.loads(tags.decode() if isinstance(tags, bytes) else str(tags))["axes"]
+        keys = [str(a["key"]).lower() for a in axes]
+    except (TypeError, ValueError, KeyError, AttributeError, UnicodeDecodeError):
+        keys = None
+    if tags is None or keys is None or len(keys) != len(shape):
+        return (), list(range(len(shape))), None
+    stated = f"(axistags {''.join(keys)}, shape {tuple(int(n) for n in shape)})"
+    for key, n in zip(keys, shape):
+        if key == "c" and n > 1:
+            raise IsoflowError(f"{where}: axis 'c' has {n} entries {stated}; isoflow reads one volume: save one "
+                               "channel")
+    kept = [i for i, (key, n) in enumerate(zip(keys, shape)) if key not in ("c", "t") or n > 1]
+    times = [k for k, i in enumerate(kept) if keys[i] == "t"]
+    if times and len(kept) != 4:
+        raise IsoflowError(f"{where}: axis 't' has {shape[kept[times[0]]]} entries {stated}; isoflow reads one "
+                           "volume: save one time point (a time series is read as 4D only of 3D volumes)")
+    index = tuple(slice(None) if i in kept else 0 for i in range(len(shape)))
+    return index, kept, times[0] if times else None
 
 
 def _element_size(value, ndim: int, where: str) -> np.ndarray:
@@ -101,8 +174,7 @@ def _element_size(value, ndim: int, where: str) -> np.ndarray:
 
 def _choose(f, h5py, path, dataset) -> str:
     """The dataset's name: the one given, or the file's only one, or 'volume'."""
-    names: list[str] = []
-    f.visititems(lambda name, node: names.append(name) if isinstance(node, h5py.Dataset) else None)
+    names, dangling = _datasets(f, h5py)
     if dataset is not None:
         if dataset not in f:
             raise IsoflowError(f"{path}: no dataset {dataset!r} (datasets: {_listed(names)})")
@@ -114,8 +186,47 @@ def _choose(f, h5py, path, dataset) -> str:
     if len(names) == 1:
         return names[0]
     if not names:
-        raise IsoflowError(f"{path}: holds no dataset")
-    raise IsoflowError(f"{path}: holds datasets {_listed(names)}; name one, e.g. {path}:/{names[0]}")
+        broken = "".join(f"; its external link /{n} names {t}, which cannot be opened" for n, t in dangling[:3])
+        raise IsoflowError(f"{path}: holds no dataset{broken}")
+    # beside a scalar or a list (a name, a voxel size) one array of 2 to 4
+    # axes is the file's volume
+    arrays = [n for n in names if 2 <= len(f[n].shape) <= 4]
+    if len(arrays) == 1:
+        return arrays[0]
+    raise IsoflowError(f"{path}: holds datasets {_listed(names)}; name one, e.g. {path}:/{(arrays or names)[0]}")
+
+
+def _datasets(f, h5py) -> tuple[list[str], list[tuple[str, str]]]:
+    """The names of the file's datasets, those an external link names
+    (``f["v"] = h5py.ExternalLink("big.h5", "/v")``, as a file that
+    gathers others' volumes holds them) too, which HDF5's visit of the
+    file's own objects leaves out; and each external link that cannot be
+    opened, with the file and path it names."""
+    names: list[str] = []
+    groups = [("", f)]
+
+    def seen(name, node):
+        if isinstance(node, h5py.Dataset):
+            names.append(name)
+        elif isinstance(node, h5py.Group):
+            groups.append((name + "/", node))
+
+    f.visititems(seen)
+    dangling = []
+    for prefix, group in groups:
+        for key in group:
+            link = group.get(key, getlink=True)
+            if not isinstance(link, h5py.ExternalLink):
+                continue
+            try:
+                node = group.get(key)
+            except (KeyError, OSError, ValueError):
+                node = None
+            if isinstance(node, h5py.Dataset):
+                names.append(prefix + key)
+            elif node is None:
+                dangling.append((prefix + key, f"{link.filename}:{link.path}"))
+    return sorted(names), dangling
 
 
 def _listed(names: list[str]) -> str:

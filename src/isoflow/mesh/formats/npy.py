@@ -20,7 +20,7 @@ import numpy as np
 from ...digital.frames import space_given
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError, coordinates
-from .registry import RawVolume, content_hint, length_unit, names_from_json, names_json, note
+from .registry import RawVolume, content_hint, names_from_json, names_json, note, unit_field
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -65,7 +65,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         if _holds_objects(path):
             raise IsoflowError(pickled_objects(path)) from None
         raise IsoflowError(f"{path}: not a readable numpy file ({exc.__class__.__name__}: {exc})") from None
-    unit = length_unit(str(meta["unit"])) if "unit" in meta else None
+    unit = unit_field(meta["unit"], f"{path}: array 'unit'") if "unit" in meta else None
     names = names_from_json(meta["label_names"], str(path), "array 'label_names'") if "label_names" in meta else None
     space = space_given(str(meta["space"]), f"{path}: array 'space'") if "space" in meta else None
     return RawVolume(arr, meta.get("pitch", 1.0), meta.get("origin"), meta.get("offset"), meta.get("parity", 0),

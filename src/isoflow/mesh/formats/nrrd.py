@@ -21,8 +21,9 @@ kind (``vector``, ``RGB-color``, ``list``, ...), must have length 1 too. A heade
 array (fewer directions than axes, an origin of another dimension) is
 refused; a non-finite ``space origin`` is read as 0 with a warning.
 The length unit is ``space units`` (with a space) or ``units`` of the
-placed axes (with ``spacings``, ``axis mins`` or ``axis maxs``), where
-every axis has the same one.
+placed axes (with ``spacings``, ``axis mins`` or ``axis maxs``): the
+first axis's, the others' lengths converted to it where they differ
+(:func:`~isoflow.mesh.formats.registry.axis_units`).
 
 A 3D Slicer segmentation (``.seg.nrrd``, :mod:`isoflow.mesh.formats.slicer`)
 of one layer is a label image; of several (4D, the layers on axis 0),
@@ -57,12 +58,12 @@ from .affine import axis_aligned, centre_affine
 from .registry import (
     RawVolume,
     ascii_unit,
+    axis_units,
     check_shape,
     import_library,
     note,
     placement,
     reading,
-    shared_unit,
     stored_values,
 )
 from .slicer import NamedHeader, layer_names, layer_of, present_labels, read_header, remember_segments, segment_fields
@@ -107,9 +108,10 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         if not np.isfinite(origin).all():
             note(f"{where}: space origin {origin.tolist()} is not finite; the origin is taken as 0")
             origin = np.zeros(dim)
-        vol, pitch, corner = axis_aligned(data, directions[placed].T, origin, where)
-        return RawVolume(vol, pitch, corner, unit=_unit(header, "space units", None, where), names=names,
-                         space=space_code(header.get("space")))
+        # each world axis's coordinates in one unit (space units of mm, mm, cm: z times 10)
+        factors, unit = _unit(header, "space units", None, where, dim)
+        vol, pitch, corner = axis_aligned(data, directions[placed].T * factors[:, None], origin * factors, where)
+        return RawVolume(vol, pitch, corner, unit=unit, names=names, space=space_code(header.get("space")))
     # without space directions, only "kinds" tells a component axis (an
     # RGB colour, a vector, a list of layers) from a domain axis
     kinds = _kinds(header, data.ndim)
@@ -126,8 +128,9 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     if not said or not placed:
         return RawVolume(data, 1.0, unit=None, names=names)
     step, centre0 = axis_samples(header, sizes, placed, where)
-    vol, pitch, corner = axis_aligned(data, np.diag(step), centre0, where)
-    return RawVolume(vol, pitch, corner, unit=_unit(header, "units", placed, where), names=names)
+    factors, unit = _unit(header, "units", placed, where, len(placed))
+    vol, pitch, corner = axis_aligned(data, np.diag(step * factors), centre0 * factors, where)
+    return RawVolume(vol, pitch, corner, unit=unit, names=names)
 
 
 def axis_samples(header: dict, sizes: tuple[int, ...], placed: list[int], where: str) -> tuple[np.ndarray, np.ndarray]:
@@ -223,17 +226,22 @@ def _kinds(header: dict, ndim: int) -> list | None:
     return list(kinds) if kinds is not None and len(kinds) == ndim else None
 
 
-def _unit(header: dict, name: str, axes: list[int] | None, where: str) -> str | None:
+def _unit(header: dict, name: str, axes: list[int] | None, where: str, count: int) -> tuple[np.ndarray, str | None]:
     """The length unit of a header's ``space units`` (one per world axis)
     or ``units`` (one per array axis, of which ``axes`` are placed; None:
-    none are, the voxel size is 1 in no unit), where they agree."""
+    none are, the voxel size is 1 in no unit), and the factor that turns
+    each of the ``count`` axes' lengths into it (:func:`axis_units`):
+    ones where the field is absent or does not give one unit per axis."""
     units = header.get(name)
     if units is None or (name == "units" and axes is None):
-        return None
+        return np.ones(count), None
     units = [units] if isinstance(units, str) else list(units)
     if axes is not None:
         units = [units[i] for i in axes if i < len(units)]
-    return shared_unit(units, where, f"NRRD {name!r}")
+    factors, unit = axis_units(units, where, f"NRRD {name!r}")
+    if len(factors) != count:  # (units that do not fit the axes: one unit only where they agree)
+        return np.ones(count), unit if (factors == 1).all() else None
+    return factors, unit
 
 
 #: the NRRD kinds of axes along which samples lie ("???" and "none": not

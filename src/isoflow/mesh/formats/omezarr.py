@@ -35,6 +35,7 @@ unit given as each axis's ``unit`` in its UDUNITS name (``micrometer``,
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import os
 import shutil
@@ -53,6 +54,7 @@ from ...scale.chunks import axis_names, never_written, open_zarr_node, spatial_a
 from .registry import (
     UDUNITS,
     RawVolume,
+    axis_units,
     check_label,
     check_shape,
     check_time,
@@ -62,7 +64,6 @@ from .registry import (
     one_time_point_labels,
     placement,
     reading,
-    shared_unit,
     space_not_kept,
     split_dataset,
     stored_values,
@@ -74,9 +75,12 @@ CHUNK = 128
 NGFF_VERSION = "0.4"
 
 
-def placement_of(multiscale: dict, dataset: dict, ndim: int, where: str) -> tuple[np.ndarray, np.ndarray]:
+def placement_of(multiscale: dict, dataset: dict, ndim: int, where: str,
+                 xyz: list[int] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(scale, translation) per stored axis: the level's transformations,
-    then the image's."""
+    then the image's; one line naming the level's scale where that of an
+    axis of ``xyz`` (the stored indices of x, y and z) is no positive voxel
+    size (the file's field, not isoflow's word for it, ``pitch``)."""
     scale, shift = np.ones(ndim), np.zeros(ndim)
     steps = list(dataset.get("coordinateTransformations") or []) + list(
         multiscale.get("coordinateTransformations") or [])
@@ -97,26 +101,37 @@ def placement_of(multiscale: dict, dataset: dict, ndim: int, where: str) -> tupl
             scale, shift = scale * values, shift * values
         else:
             shift = shift + values
+    for name, i in zip("xyz", xyz or []):
+        if not scale[i] > 0:
+            raise IsoflowError(f"{where}: OME-Zarr level {dataset.get('path')!r}: the scale of axis {name!r} is "
+                               f"{scale[i]:g} (its coordinateTransformations, then the image's), not a positive "
+                               "voxel size")
     return scale, shift
 
 
-def axis_unit(multiscale: dict | None, xyz: list[int], where: str) -> str | None:
+def axis_unit(multiscale: dict | None, xyz: list[int], where: str) -> tuple[np.ndarray, str | None]:
     """The length unit of an OME-Zarr image's x, y and z axes (the
     ``unit`` of each of their ``axes`` entries, NGFF 0.4 on: a UDUNITS name
-    such as ``micrometer``), where they agree (:func:`shared_unit`); None
-    for a plain array and for axes without one.
+    such as ``micrometer``), and the factor per axis that turns its
+    scale and translation into that unit: x's, where they differ (a z in
+    ``millimeter`` beside an x in ``micrometer``: times 1000;
+    :func:`~isoflow.mesh.formats.registry.axis_units`); None and ones for
+    a plain array and for axes without one.
 
     Examples
     --------
     >>> axes = [{"name": n, "type": "space", "unit": "micrometer"} for n in "zyx"]
     >>> axis_unit({"axes": [{"name": "t", "unit": "second"}] + axes}, [3, 2, 1], "a.zarr")
-    '\u00b5m'
+    (array([1., 1., 1.]), '\u00b5m')
+    >>> axes[0]["unit"] = "millimeter"
+    >>> axis_unit({"axes": axes}, [2, 1, 0], "a.zarr")
+    (array([   1.,    1., 1000.]), '\u00b5m')
     """
     axes = None if multiscale is None else multiscale.get("axes")
     if not isinstance(axes, list):
-        return None
+        return np.ones(min(len(xyz), 3)), None
     units = [axes[i].get("unit") if i < len(axes) and isinstance(axes[i], dict) else None for i in xyz[:3]]
-    return shared_unit(units, where, "OME-Zarr axis units")
+    return axis_units(units, where, "OME-Zarr axis units")
 
 
 #: what a store too large to read can do instead: the commands that read it block by block (the
@@ -165,13 +180,14 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
             return RawVolume(data, *(v if time is None or not v.ndim else v[:3] for v in (pitch, origin)), fill=fill,
                              unwritten=blank)
         return RawVolume(data, fill=fill, unwritten=blank)
-    scale, shift = placement_of(multiscale, level, data.ndim, where)
     xyz, _ = spatial_axes(names, data.shape, where, time=True)
-    pitch, origin = scale[xyz[:3]], shift[xyz[:3]] - scale[xyz[:3]] / 2
+    scale, shift = placement_of(multiscale, level, data.ndim, where, xyz)
+    factors, unit = axis_unit(multiscale, xyz, where)
+    pitch, origin = scale[xyz[:3]] * factors, (shift[xyz[:3]] - scale[xyz[:3]] / 2) * factors
     if len(xyz) == 4:  # time keeps step 1 from 0, as a 4D NIfTI's does: a lattice axis, not seconds
         pitch, origin = np.append(pitch, 1.0), np.append(origin, 0.0)
     return RawVolume(to_xyz(data, names, where), pitch, origin, fill=fill, unwritten=blank,
-                     unit=axis_unit(multiscale, xyz, where), names=label_properties(array, where))
+                     unit=unit, names=label_properties(array, where))
 
 
 def label_properties(array, where: str | None = None) -> dict[int, str] | None:
@@ -318,8 +334,11 @@ class StoreArray:
             if "pitch" in attrs and "origin" in attrs:
                 return tuple(self._own_axes(np.asarray(attrs[k], np.float64)) for k in ("pitch", "origin"))  # type: ignore[return-value]
             return None, None
-        scale, shift = placement_of(self.multiscale, self.dataset, self.array.ndim, self.where)
-        return scale[self.xyz], shift[self.xyz] - scale[self.xyz] / 2
+        scale, shift = placement_of(self.multiscale, self.dataset, self.array.ndim, self.where, self.xyz)
+        factors = self.units[0]
+        if len(self.xyz) == 4:  # (a time axis: its step as it is)
+            factors = np.append(factors, 1.0)
+        return scale[self.xyz] * factors, (shift[self.xyz] - scale[self.xyz] / 2) * factors
 
     def _own_axes(self, value: np.ndarray) -> np.ndarray:
         """A plain array's attribute of one entry per stored axis, of the
@@ -329,6 +348,11 @@ class StoreArray:
 
     def unit(self) -> str | None:
         """The length unit of the placement (:func:`axis_unit`)."""
+        return self.units[1]
+
+    @functools.cached_property
+    def units(self) -> tuple[np.ndarray, str | None]:
+        """:func:`axis_unit` of the store's axes, read (and any warning given) once."""
         return axis_unit(self.multiscale, self.xyz, self.where)
 
 

@@ -31,7 +31,7 @@ import numpy as np
 
 from ...digital.frames import frame_text
 from ...digital.lattice import DigitalObject
-from ...digital.units import length_unit
+from ...digital.units import LENGTH_UNITS, length_unit, unit_factor
 from ...errors import IsoflowError, given_text, number_text, warn
 from ...scale.chunks import fourth_axis_name, spatial_axes, split_store
 
@@ -370,23 +370,79 @@ class RawVolume:
     names: dict[int, str] | None = None
 
 
-def shared_unit(units, where: str, what: str) -> str | None:
+def axis_units(units, where: str, what: str) -> tuple[np.ndarray, str | None]:
     """The one length unit of several axes (:func:`length_unit` of each),
-    or None, said in a warning, where they differ: one voxel size and
-    origin cannot be in two units.
+    and per axis the factor that turns its lengths into that unit: 1 where
+    they agree; where they differ and each is a length unit isoflow knows
+    (a z in mm beside an x and y in µm), the first axis's unit, the others
+    converted to it (the z's voxel size and origin times 1000), as an
+    OME-TIFF's PhysicalSizeZ is converted to PhysicalSizeXUnit, so that
+    volumes, areas and the surface's shape are in one unit; otherwise
+    (a unit isoflow does not know, or some axes without one) no unit,
+    said in a warning, and factors of 1: one voxel size and origin cannot
+    be in two units.
+
+    Parameters
+    ----------
+    units : sequence
+        The unit of each axis as the file gives it (None where it gives none).
+    where : str
+        The file, as the warning names it.
+    what : str
+        The field, as the warning names it (``"NRRD 'space units'"``).
+
+    Returns
+    -------
+    factors : numpy.ndarray
+        One per axis.
+    unit : str or None
 
     Examples
     --------
-    >>> shared_unit(["mm", "millimeter", "Millimetre"], "a.nrrd", "NRRD space units")
-    'mm'
-    >>> shared_unit([None, None], "a.nrrd", "NRRD space units") is None
-    True
+    >>> axis_units(["mm", "millimeter", "Millimetre"], "a.nrrd", "NRRD space units")
+    (array([1., 1., 1.]), 'mm')
+    >>> axis_units(["micrometer", "micrometer", "millimeter"], "a.zarr", "OME-Zarr axis units")
+    (array([   1.,    1., 1000.]), '\u00b5m')
+    >>> axis_units([None, None], "a.nrrd", "NRRD space units")
+    (array([1., 1.]), None)
     """
-    spelled = {length_unit(u) for u in units}
-    if len(spelled) == 1:
-        return spelled.pop()
-    if spelled:
-        note(f"{where}: the {what} differ by axis ({', '.join(str(u) for u in units)}); no unit is reported")
+    spelled = [length_unit(u) for u in units]
+    factors = np.ones(len(spelled))
+    if len(set(spelled)) <= 1:
+        return factors, spelled[0] if spelled else None
+    if all(u in LENGTH_UNITS for u in spelled):
+        return np.array([unit_factor(u, spelled[0]) for u in spelled]), spelled[0]
+    note(f"{where}: the {what} differ by axis ({', '.join(str(u) for u in units)}); no unit is reported")
+    return factors, None
+
+
+def unit_field(value: object, where: str) -> str | None:
+    """The length unit a file's ``unit`` field holds (:func:`length_unit`
+    of its text: a string, bytes, or a NumPy array of one), or None, said
+    in a warning, where the field holds no text (a number, several
+    strings): the volume is read, with no unit, rather than with the
+    value's repr printed as its unit.
+
+    Parameters
+    ----------
+    value : object
+        The field as the format's reader gives it.
+    where : str
+        The file and field, as the warning names them (``"a.npz: array 'unit'"``).
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> unit_field(np.array("micron"), "a.npz: array 'unit'"), unit_field(b"mm", "a.h5: attribute 'unit'")
+    ('\u00b5m', 'mm')
+    """
+    text = value.item() if isinstance(value, np.ndarray) and value.ndim == 0 else value
+    if isinstance(text, (str, bytes)):
+        return length_unit(text)
+    note(f"{where} is {given_text(value)}, not the text of a length unit; no unit is reported")
     return None
 
 
