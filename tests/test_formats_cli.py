@@ -272,13 +272,14 @@ def test_surface_of_a_store_counts_the_voxels_of_the_block_it_names(tmp_path, ca
     count, corner = block_named(line)
     assert all(c % 5 == 0 for c in corner), line
     assert count == np.count_nonzero(labels[tuple(slice(c, c + 5) for c in corner)] > 1) > 0
-    # a 2 on the first layer of the second chunk: in the margin the first block reads
+    # a 2 and a 3 on the first layer of the second chunk: in the margin the first block reads (two
+    # labels: a store of 0 and 2 alone is the mask of 2, as in memory)
     lone = np.zeros((10, 10, 10), np.uint8)
-    lone[5, 0, 0] = 2
+    lone[5, 0, 0], lone[5, 0, 1] = 2, 3
     zarr.create_array(str(tmp_path / "m.zarr"), data=lone, chunks=(5, 5, 5), zarr_format=2)
     line = fails(capsys, "surface", tmp_path / "m.zarr", "-o", tmp_path / "m.ply", "--threads", threads,
                  words=("m.zarr: not a binary volume",))
-    assert block_named(line) == (1, [5, 0, 0])
+    assert block_named(line) == (2, [5, 0, 0])
 
 
 def corrupt_files(tmp_path):
@@ -700,7 +701,8 @@ def test_a_time_series_given_to_surface_or_flow_says_how_to_take_one_time_point(
     p = subprocess.run([sys.executable, "-m", "isoflow", command[0], name, *command[1:]],
                        capture_output=True, text=True, cwd=tmp_path)
     assert p.returncode == 2 and p.stderr.count("\n") == 1 and name in p.stderr, p.stderr
-    assert "4D, shape 8x7x6x3 (a 4th axis of 3 entries, time points or channels" in p.stderr
+    # the OME-Zarr image and the OME-TIFF name their 4th axis t: a time series
+    assert "4D, shape 8x7x6x3 (a time series of 3 time points along its 4th axis 't', read as x, y, z, t)" in p.stderr
     line = p.stderr.split("give that: ", 1)[1].strip()
     assert line.startswith("python -c ")
     shell = subprocess.run(sys.executable + line[len("python"):], shell=True, capture_output=True, text=True,
@@ -770,8 +772,8 @@ def test_a_time_series_store_too_large_to_read_whole_says_how_to_take_one_time_p
     monkeypatch.chdir(tmp_path)
     line = fails(capsys, command[0], "ts.ome.zarr", *command[1:])
     assert line.startswith(f"isoflow {command[0]}: error: ts.ome.zarr: {needs}, this one is 4D, shape 8x7x6x3 "
-                           "(a 4th axis of 3 entries, time points or channels, read as x, y, z, t); save one entry "
-                           "as 3D and give that: python -c "), line
+                           "(a time series of 3 time points along its 4th axis 't', read as x, y, z, t); save one "
+                           "time point as 3D and give that: python -c "), line
     assert not list(tmp_path.glob("s.*")) and not (tmp_path / "f").exists()
 
 
@@ -1827,6 +1829,40 @@ def test_the_command_that_saves_an_ome_tiffs_channels_as_slices_names_a_clean_om
     with tifffile.TiffFile(tmp_path / "c_stack.ome.tif") as tif:
         assert tif.is_ome and tif.series[0].axes == "ZYX"
         assert np.array_equal(tif.asarray(), tifffile.imread(tmp_path / "c.ome.tif"))
+
+
+@pytest.mark.parametrize("command", [["surface", "-o", "s.ply"], ["info", "--labels"], ["flow", "--steps", "1"]])
+def test_a_4d_store_is_called_what_its_axes_metadata_names_it(tmp_path, command):
+    """A 4D volume refused by a command that takes 3D was called "a 4th
+    axis of 3 entries, time points or channels" whatever the file said: an
+    OME-Zarr image whose 4th axis is 't' (NGFF's axes) is a time series, a
+    zarr array whose dimension names are x, y, z, c holds channels, and an
+    array that names no axes is still "time points or channels". Each
+    line's way out (time=0) gives a 3D file that every command reads."""
+    zarr = pytest.importorskip("zarr")
+    time_series_store(tmp_path / "ts.ome.zarr")
+    stored = np.zeros((8, 7, 6, 3), np.uint8)
+    stored[2:5, 2:5, 2:4] = 1
+    zarr.create_array(str(tmp_path / "c.zarr"), data=stored, dimension_names=list("xyzc"))
+    zarr.create_array(str(tmp_path / "u.zarr"), data=stored)
+    # the refusal's words with the count (surface, flow) and without it (the label table's), one entry's name
+    said = {"ts.ome.zarr": ("a time series of 3 time points along its 4th axis 't'",
+                            "a time series of time points along its 4th axis 't'", "time point"),
+            "c.zarr": ("3 channels along its 4th axis 'c'", "channels along its 4th axis 'c'", "channel"),
+            "u.zarr": ("a 4th axis of 3 entries, time points or channels", "a 4th axis of time points or channels",
+                       "entry")}
+    for name, (counted, uncounted, entry) in said.items():
+        p = subprocess.run([sys.executable, "-m", "isoflow", command[0], name, *command[1:]],
+                           capture_output=True, text=True, cwd=tmp_path)
+        assert p.returncode == 2 and p.stderr.count("\n") == 1 and "Traceback" not in p.stderr, p.stderr
+        words = (f"({uncounted}, read as x, y, z, t): read one {entry} with read_labels" if command[0] == "info" else
+                 f"this one is 4D, shape 8x7x6x3 ({counted}, read as x, y, z, t); save one {entry} as 3D")
+        assert words in p.stderr, p.stderr
+        assert ("time series" in p.stderr) == (name == "ts.ome.zarr"), p.stderr
+        line = p.stderr.split("give that: ", 1)[1].strip()
+        subprocess.run(sys.executable + line[len("python"):], shell=True, check=True, cwd=tmp_path)
+        assert isoflow.read_labels(tmp_path / "t0.npz").array.shape == (8, 7, 6)
+        (tmp_path / "t0.npz").unlink()
 
 
 @pytest.mark.parametrize("command", [["surface", "-o", "s.ply"], ["info", "--labels"]])

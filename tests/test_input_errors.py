@@ -4,6 +4,8 @@ traceback, no silently wrong value, nothing written."""
 import json
 import os
 import re
+import subprocess
+import sys
 import zipfile
 from pathlib import Path
 
@@ -198,31 +200,34 @@ def test_point_list_with_a_header_of_column_names_reads_its_points(tmp_path, cap
     fails(capsys, "info", tmp_path / "words.txt", words=("words.txt:1", "not a number: 'x'"))
 
 
-def test_point_list_with_pandas_index_column_is_refused_naming_index_false(tmp_path):
-    """cli.md said a header "such as the ``x,y,z`` header pandas' ``to_csv``
-    writes" is skipped; ``to_csv`` writes its index by default, a header
-    ``,x,y,z`` over rows ``i,x,y,z``, which was refused as "empty
-    coordinate in ',x,y,z'". It is refused in one line naming the index
-    column and ``index=False`` (the file below is what pandas' default
-    writes: csv with an unnamed first column of 0, 1, 2 ...)."""
-    import csv
-    import subprocess
-    import sys
-
-    points = np.random.default_rng(6).integers(-20, 20, size=(12, 3))
-    with open(tmp_path / "points.csv", "w", newline="") as fh:
-        writer = csv.writer(fh, lineterminator="\n")
-        writer.writerow(["", "x", "y", "z"])
-        writer.writerows([i, *map(int, p)] for i, p in enumerate(points))
-    run = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "points.csv")],
-                         capture_output=True, text=True)
-    lines = run.stderr.strip().splitlines()
-    assert run.returncode == 2 and len(lines) == 1 and "Traceback" not in run.stderr, run.stderr
-    assert "points.csv:1:" in lines[0] and "',x,y,z'" in lines[0] and "index=False" in lines[0], lines[0]
-    with pytest.raises(IsoflowError, match="index=False"):
-        read_points(tmp_path / "points.csv")
-    text = " ".join((Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text().split())
-    assert "pandas' `to_csv(path, index=False)` writes" in text
+@pytest.mark.parametrize("first", ["", "index"], ids=["to_csv", "reset_index"])
+def test_point_list_written_with_its_index_column_reads_its_points(tmp_path, first):
+    """pandas' ``DataFrame.to_csv()`` writes the frame's index as a first
+    column named "" (``,x,y,z``; "index" after ``reset_index``), 0, 1, 2,
+    ... down its rows: the file was refused ("empty coordinate in
+    ',x,y,z'"). That column is now skipped, on either reader (the blanks
+    and commas mixed of the second file need the line reader), and the
+    command reads the points written; a line of the wrong count is still
+    refused naming it. pandas is not installed: the files are written as it
+    writes them."""
+    rng = np.random.default_rng(7)
+    points = rng.integers(-20, 20, size=(30, 3))
+    rows = "".join(f"{i},{a},{b},{c}\n" for i, (a, b, c) in enumerate(points))
+    (tmp_path / "points.csv").write_text(f"{first},x,y,z\n{rows}")
+    assert read_points(tmp_path / "points.csv").tolist() == points.tolist()
+    spaced = "".join(f"{i}, {a} {b} {c}\n" for i, (a, b, c) in enumerate(points))  # blanks and commas mixed
+    (tmp_path / "spaced.csv").write_text(f"{first},x,y,z\n{spaced}")
+    assert read_points(tmp_path / "spaced.csv").tolist() == points.tolist()
+    (tmp_path / "plane.csv").write_text(f"{first},x,y\n" + "".join(f"{i},{a},{b}\n" for i, (a, b, _) in enumerate(points)))
+    assert read_points(tmp_path / "plane.csv").tolist() == points[:, :2].tolist()
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "points.csv"), "--points-are", "voxels",
+                           "--json"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout)
+    assert report["voxels"] == len(np.unique(points, axis=0)) and report["dimension"] == 3
+    (tmp_path / "short.csv").write_text(f"{first},x,y,z\n0,1,2,3\n1,4,5\n")
+    with pytest.raises(IsoflowError, match=re.escape("short.csv:3: expected 3 coordinates, got 2")):
+        read_points(tmp_path / "short.csv")
 
 
 def test_point_list_read_whole_equals_line_by_line(tmp_path):
@@ -380,8 +385,8 @@ def test_a_label_image_refusal_names_only_options_the_command_takes(tmp_path, ca
     zarr = pytest.importorskip("zarr")
     zarr.create_array(str(tmp_path / "l.zarr"), data=labels, chunks=(3, 3, 3), zarr_format=2)
     extra = ["--out", tmp_path / "run", "--volumes", ".zarr"] if command == "flow" else extra
-    # (the flow block by block names the flow in memory, where a store of 0 and that label alone is a mask)
-    offer = "there selects" if command == "flow" else "select one label with --label "
+    # (the flow block by block names that label in the flow in memory)
+    offer = "in the flow in memory" if command == "flow" else "select one label with --label "
     line = fails(capsys, command, tmp_path / "l.zarr", *extra,
                  words=("l.zarr", "not a binary volume", "in the block at voxel", offer))
     assert ("--labels" in line) == names_labels

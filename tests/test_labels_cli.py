@@ -295,6 +295,7 @@ def test_a_store_read_as_nan_where_never_written_is_refused_with_what_would_read
     labels = zarr.create_array(str(tmp_path / "labels.zarr"), shape=(8, 8, 8), chunks=(4, 8, 8), dtype="u1",
                                fill_value=0)
     labels[:4] = mask[:4] * 2
+    labels[0, 0, 0] = 3  # two labels: a store of 0 and 2 alone is the mask of 2, as in memory
     code, err, _ = info(tmp_path / "labels.zarr")
     assert code == 2 and len(err) == 1 and err[0].endswith("or give every label its row with --labels "
                                                            "(isoflow.label_table(isoflow.read_labels(path)))"), err
@@ -1987,6 +1988,54 @@ def test_labels_of_a_zarr_store_with_a_last_axis_of_one_entry(capsys, tmp_path):
     report = json.loads(out)
     assert (report["pitch"], report["origin"]) == ([0.5, 0.5, 2.0], [1.0, 2.0, 3.0])
     assert [row["volume"] for row in report["labels"]] == [p.area * 0.5 for p in regionprops(image)]
+
+
+@pytest.mark.parametrize("name", ["x1.zarr", "x1.npy", "x1.h5"])
+def test_one_label_of_a_last_axis_of_one_entry_is_3d(tmp_path, name):
+    """``info X1 --label 1`` and ``surface X1 --label 1`` of labels of shape
+    (X, Y, Z, 1) read the label image as ``info --labels`` does, in 3D
+    (a zarr store block by block too): ``info`` reported a 4D volume one
+    voxel thick with b1 and b2 unknown, and ``surface`` refused it as 4D.
+    The report is scikit-image's Euler number and the voxels of the 3D
+    mask, whose Betti numbers are ``analyze``'s of ``labels[..., 0] == 1``;
+    the surface reads back in trimesh closed, two spheres around the
+    label's volume."""
+    from skimage.measure import euler_number
+
+    labels = np.zeros((9, 8, 7, 1), np.uint8)
+    labels[1:6, 1:6, 1:6, 0] = 1
+    labels[3, 3, 3, 0] = 0  # a cavity: b2 = 1, which a 4D report does not count
+    labels[7, 5:7, 2:5, 0] = 2
+    mask = labels[..., 0] == 1
+    pitch = [1.0, 1.0, 1.0]
+    path = tmp_path / name
+    if name.endswith(".zarr"):  # read block by block, placed by its attributes without their fourth entries
+        zarr = pytest.importorskip("zarr")
+        store = zarr.create_array(str(path), shape=labels.shape, chunks=(4, 4, 4, 1), dtype=labels.dtype)
+        store[...] = labels
+        pitch = [0.5, 0.5, 2.0]
+        store.attrs.update(pitch=[*pitch, 1.0], origin=[0.0, 0.0, 0.0, 0.0])
+    elif name.endswith(".h5"):
+        h5py = pytest.importorskip("h5py")
+        with h5py.File(path, "w") as f:
+            f["labels"] = labels
+    else:
+        np.save(path, labels)
+    cmd = [sys.executable, "-m", "isoflow"]
+    done = subprocess.run([*cmd, "info", str(path), "--label", "1", "--json"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout)
+    assert report["shape"] == list(mask.shape) and report["pitch"] == pitch
+    assert report["voxels"] == np.count_nonzero(mask) == 124
+    assert report["euler_characteristic"] == euler_number(mask, connectivity=1) == 2
+    assert report["betti"] == analyze(mask)["betti"] == [1, 0, 1]
+    assert report["volume"] == 124 * math.prod(pitch)
+    out = tmp_path / "x1.stl"
+    done = subprocess.run([*cmd, "surface", str(path), "--label", "1", "-o", str(out)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    mesh = trimesh.load(out)
+    assert mesh.is_watertight and mesh.euler_number == 4 and len(mesh.split(only_watertight=True)) == 2
+    assert mesh.volume == pytest.approx(124 * math.prod(pitch))
 
 
 def test_info_labels_json_names_a_bool_image_as_its_uint8_labels(tmp_path, capsys):

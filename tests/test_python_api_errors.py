@@ -1638,3 +1638,64 @@ def test_a_manifold_given_for_a_mesh_names_its_bridge(name, tmp_path):
     m = cube.to_mesh()
     assert isoflow.voxelize_mesh((m.vert_properties[:, :3], m.tri_verts), resolution=4).voxels == 4 ** 3
     assert isoflow.from_manifold(cube, pitch=0.25).voxels == 4 ** 3
+
+
+@pytest.mark.parametrize("threads", [Fraction(8), Decimal("8"), "8"], ids=["Fraction", "Decimal", "text"])
+@pytest.mark.parametrize("call", [
+    lambda t: isoflow.analyze(CUBE, threads=t),
+    lambda t: isoflow.label_table(CUBE.astype(np.uint8), threads=t),
+])
+def test_a_thread_count_of_another_number_type_is_refused_as_a_float_is(call, threads):
+    """``threads`` is an integer argument: ``int``, a NumPy integer or a 0D
+    array of one, as ``connectivity`` and ``steps``. ``Fraction(8)`` and
+    ``Decimal("8")`` were taken, their text being ``8``, where ``8.0`` was
+    refused."""
+    with pytest.raises(IsoflowError) as info:
+        call(threads)
+    assert str(info.value) == f"threads must be a positive integer, got {threads!r}"
+    call(np.array(2))
+
+
+@pytest.mark.parametrize("name", ["workers", "width"])
+@pytest.mark.parametrize("given", [Fraction(2), Decimal("2"), "2", 2.0], ids=["Fraction", "Decimal", "text", "float"])
+def test_flow_chunked_refuses_a_worker_count_that_is_no_integer_before_writing(tmp_path, name, given):
+    # "2", Fraction(2) and Decimal("2") were taken as 2 workers where 2.0 was refused
+    zarr = pytest.importorskip("zarr")
+    from isoflow.flow.chunked import flow_chunked
+
+    zarr.open_array(str(tmp_path / "in.zarr"), mode="w", shape=(3, 3, 3), chunks=(2, 2, 2), dtype="u1")[...] = 1
+    with pytest.raises(IsoflowError) as info:
+        flow_chunked(tmp_path / "in.zarr", tmp_path / "out", **{name: given})
+    assert str(info.value) == f"{name} must be a positive integer, got {given!r}"
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("voxelize", [
+    lambda **k: isoflow.voxelize_mesh(_box(), **k),
+    lambda **k: isoflow.voxelize_meshes([_box()], **k),
+])
+def test_a_pitch_is_a_real_number_as_digital_objects_pitch_is(voxelize):
+    """A voxel size is a real number (``numbers.Real``), as
+    ``DigitalObject(..., pitch=)`` takes one: ``Fraction(1, 2)`` is 0.5,
+    ``Decimal("0.5")``, which is no ``Real``, is refused naming it (it was
+    read by ``float()``, where ``DigitalObject`` refused it)."""
+    pytest.importorskip("trimesh")
+    with pytest.raises(IsoflowError) as info:
+        voxelize(pitch=Decimal("0.5"))
+    assert str(info.value) == "voxelize: pitch must be a positive number, got Decimal('0.5')"
+    with pytest.raises(IsoflowError, match=re.escape("'pitch' must be a number (one, or one per axis), got Decimal('0.5')")):
+        isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=Decimal("0.5"))
+    # the unit box at pitch 1/2: 2 x 2 x 2 voxels
+    assert voxelize(pitch=Fraction(1, 2)).voxels in (8, (8,))
+
+
+@pytest.mark.parametrize(("call", "words"), [
+    (lambda v: isoflow.analyze(CUBE, connectivity=v), "connectivity '6' is not valid in 3D: it must be an integer (use 6 or 26)"),
+    (lambda v: isoflow.run_flow(CUBE, steps=v), "steps must be an integer >= 0, got '6'"),
+])
+def test_a_number_given_as_a_numpy_string_is_refused_as_text(call, words):
+    # np.str_("6") has a shape () and a dtype: it was indexed as a 0D array, str's
+    # indexing raising "TypeError: string indices must be integers, not 'tuple'"
+    with pytest.raises(IsoflowError) as info:
+        call(np.str_("6"))
+    assert str(info.value) == words

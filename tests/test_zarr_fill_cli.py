@@ -14,7 +14,9 @@ import warnings
 
 import numpy as np
 import pytest
+import trimesh
 
+from isoflow import analyze_zarr
 from isoflow.cli import main
 
 zarr = pytest.importorskip("zarr")
@@ -251,24 +253,63 @@ def test_one_time_point_says_how_many_of_its_own_chunks_were_never_written(tmp_p
     assert read(0) == ("8\n", [])
 
 
-def test_a_0_255_mask_read_block_by_block_is_offered_its_value_as_the_label(tmp_path, capsys):
-    """A 0/255 mask in a .zarr store is read block by block, which takes
-    0/1 alone (docs/formats.md): the refusal said "--label N", where the
-    one value, 255, is the label that selects the mask; it names it (as
-    the block's), and --label 255 then counts the mask's voxels. A block
-    of two labels still says N."""
-    mask = np.zeros((8, 6, 6), np.uint8)
-    mask[2:6, 1:5, 1:5] = 255
-    zarr.create_array(str(tmp_path / "m.zarr"), shape=mask.shape, chunks=(4, 6, 6), dtype="u1")[:] = mask
+def test_a_block_of_one_label_is_offered_its_value_as_the_label(tmp_path, capsys):
+    """A store of labels refused block by block, whose refusing block holds
+    0 and one value alone (255), names that value as the label that
+    selects it (as the block's), and --label 255 then counts its voxels.
+    A block of two labels still says N."""
+    labels = np.zeros((8, 6, 6), np.uint8)
+    labels[1:3, 1:5, 1:5] = 255
+    labels[5:7, 1:5, 1:5] = 7  # in the second block of chunks: the first holds 0 and 255 alone
+    zarr.create_array(str(tmp_path / "m.zarr"), shape=labels.shape, chunks=(4, 6, 6), dtype="u1")[:] = labels
     for command in (["info"], ["surface", "-o", str(tmp_path / "m.ply")]):
         assert main([command[0], str(tmp_path / "m.zarr"), *command[1:]]) == 2
         err = capsys.readouterr().err
         assert "select one label with --label 255 (label=255; 255 is the one value other than 0 in that block)" in err
         assert "--label N" not in err, err
+        assert not (tmp_path / "m.ply").exists()
     assert main(["info", str(tmp_path / "m.zarr"), "--label", "255", "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["voxels"] == np.count_nonzero(mask == 255)
-    two = mask // 255 * 2
+    assert json.loads(capsys.readouterr().out)["voxels"] == np.count_nonzero(labels == 255)
+    two = (labels == 255) * np.uint8(2)
     two[2, 1, 1] = 3
     zarr.create_array(str(tmp_path / "two.zarr"), shape=two.shape, chunks=(4, 6, 6), dtype="u1")[:] = two
     assert main(["info", str(tmp_path / "two.zarr")]) == 2
     assert "select one label with --label N (label=N)" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("value", [255, -1], ids=["uint8 0/255", "int16 0/-1"])
+def test_a_store_of_0_and_one_value_is_its_mask_block_by_block(tmp_path, value):
+    """A mask written 0/255 in a .zarr store, read block by block by
+    ``info`` and ``surface``, is the mask of 255, as the same array in an
+    .npy is (and as ``read_volume`` reads the store whole): it was refused
+    block by block as "not a binary volume". The first block of chunks
+    holds 0 alone, so the 255 is met in the pass. The report is
+    scikit-image's Euler number and the voxel count of the mask, the
+    surface trimesh's closed mesh of its volume; ``analyze_zarr`` gives
+    the same."""
+    from skimage.measure import euler_number
+
+    dtype = np.uint8 if value == 255 else np.int16
+    mask = np.zeros((12, 10, 9), bool)
+    mask[5:11, 2:8, 2:7] = True
+    mask[7, 4, 4] = False  # a cavity
+    stored = (mask * value).astype(dtype)
+    zarr.create_array(str(tmp_path / "m.zarr"), shape=stored.shape, chunks=(4, 5, 5), dtype=dtype)[:] = stored
+    np.save(tmp_path / "m.npy", stored)
+    want = {"voxels": int(np.count_nonzero(mask)), "euler_characteristic": int(euler_number(mask, connectivity=1))}
+    reports = {}
+    for name in ("m.zarr", "m.npy"):
+        done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / name), "--json"],
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        report = json.loads(done.stdout)
+        assert {k: report[k] for k in want} == want and report["betti"] == [1, 0, 1]
+        reports[name] = {k: v for k, v in report.items() if k != "input"}
+        out = tmp_path / f"{name}.stl"
+        done = subprocess.run([sys.executable, "-m", "isoflow", "surface", str(tmp_path / name), "-o", str(out)],
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        mesh = trimesh.load(out)
+        assert mesh.is_watertight and mesh.euler_number == 4 and mesh.volume == pytest.approx(want["voxels"])
+    assert reports["m.zarr"] == reports["m.npy"]
+    assert analyze_zarr(tmp_path / "m.zarr").betti == [1, 0, 1]

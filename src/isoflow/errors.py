@@ -170,10 +170,13 @@ def scalar_given(value: object) -> object:
     Examples
     --------
     >>> import numpy as np
-    >>> scalar_given(np.array(6)), scalar_given(6), scalar_given([6])
-    (np.int64(6), 6, [6])
+    >>> scalar_given(np.array(6)), scalar_given(6), scalar_given([6]), scalar_given(np.str_("6"))
+    (np.int64(6), 6, [6], np.str_('6'))
     """
-    if getattr(value, "shape", None) == () and hasattr(value, "dtype") and hasattr(value, "__getitem__"):
+    # a NumPy string (np.str_("6")) has a shape and a dtype too, but its
+    # indexing is str's, which takes no tuple: it is refused as the text it is
+    if getattr(value, "shape", None) == () and hasattr(value, "dtype") and hasattr(value, "__getitem__") \
+            and not isinstance(value, (str, bytes)):
         return value[()]
     return value
 

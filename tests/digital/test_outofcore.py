@@ -574,7 +574,7 @@ def test_bad_zarr_inputs_raise_with_the_path(tmp_path, rng):
 
 def test_cli_errors_are_one_line_with_the_path(tmp_path, capsys):
     bad = np.zeros((10, 10, 10), np.uint8)
-    bad[9, 9, 9] = 7  # not in the first chunk: found while streaming
+    bad[9, 9, 9], bad[8, 8, 8] = 7, 3  # not in the first chunk: found while streaming (two labels: no mask)
     write_zarr(tmp_path / "bad.zarr", bad, (4, 4, 4))
     # the error found while streaming, as the command in a process of its own
     p = subprocess.run([sys.executable, "-m", "isoflow.cli", "info", str(tmp_path / "bad.zarr")],

@@ -11,7 +11,9 @@ interruption leaves the previous run as it was."""
 
 from __future__ import annotations
 
+import csv
 import json
+import re
 import signal
 import subprocess
 import sys
@@ -376,27 +378,33 @@ def test_command_on_a_label_image_names_the_way_to_one_label(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["steps"][0]["voxels"] == np.count_nonzero(v == 2) == 30
 
 
-@pytest.mark.parametrize("dtype", [np.uint8, np.float32])
-def test_command_on_a_mask_of_one_value_names_the_flow_in_memory_without_an_option(tmp_path, capsys, dtype):
-    """A 0/255 mask flowed block by block was refused with "select one
-    label with --label 255 in the flow in memory", but the flow in memory
-    reads a store of 0 and 255 alone as its mask with no option; the line
-    now says so (and keeps --label 255 for a label image), and the flow in
-    memory it names flows the mask as the 0/1 store of the same voxels."""
+def test_command_flows_a_mask_of_one_value_block_by_block(tmp_path, capsys):
+    """A 0/255 mask flowed block by block (``--volumes .zarr``) was refused
+    as "not a binary volume", where the flow in memory and ``read_volume``
+    read a store of 0 and 255 alone as its mask: it is now flowed block by
+    block as that mask, step for step the flow of the 0/1 store of the same
+    voxels (its first state all of them). A store of 255 and another label
+    is still refused, naming the one value of the block that refused it as
+    the --label of the flow in memory."""
     v = crossing_volume()[:8, :8, :8]
-    store = tmp_path / "mask.zarr"
-    plain_store(store, (v * 255).astype(dtype), (4, 8, 8))
-    assert main(["flow", str(store), "--out", str(tmp_path / "run"), "--volumes", ".zarr"]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and err[0].endswith(
-        "or flow it in memory (without --volumes .zarr), which reads a store of 0 and 255 alone as its mask (and "
-        "--label 255 there selects 255 of a label image), or write its voxels as a store of their own"), err
+    plain_store(tmp_path / "mask.zarr", (v * 255).astype(np.uint8), (4, 8, 8))
     plain_store(tmp_path / "ones.zarr", v.astype(np.uint8), (4, 8, 8))
     flows = []
     for name in ("mask.zarr", "ones.zarr"):
-        assert main(["flow", str(tmp_path / name), "--steps", "2", "--json"]) == 0
-        flows.append([step["voxels"] for step in json.loads(capsys.readouterr().out)["steps"]])
+        out = tmp_path / f"run_{name.split('.')[0]}"
+        assert main(["flow", str(tmp_path / name), "--steps", "2", "--out", str(out), "--volumes", ".zarr"]) == 0, \
+            capsys.readouterr().err
+        capsys.readouterr()
+        with open(out / "flow.csv", newline="") as fh:
+            flows.append([int(row["voxels"]) for row in csv.DictReader(fh)])
     assert flows[0] == flows[1] and flows[0][0] == np.count_nonzero(v)
+    labels = (v * 255).astype(np.uint8)
+    labels[4:][v[4:]] = 7  # each block holds 0 and one label alone: 255, then 7 (refused by either)
+    plain_store(tmp_path / "labels.zarr", labels, (4, 8, 8))
+    assert main(["flow", str(tmp_path / "labels.zarr"), "--out", str(tmp_path / "run"), "--volumes", ".zarr"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and re.search(r"or select one label with --label (255|7) in the flow in memory", err[0]), err
+    assert not (tmp_path / "run").exists()
 
 
 def test_help_names_the_flow_block_by_block(capsys):

@@ -174,13 +174,15 @@ def refuse_store_read_whole(args: argparse.Namespace) -> None:
     IsoflowError
         One line: the memory the read needs, the budget, what to do.
     """
-    from ..mesh.formats.omezarr import store_volume
+    from ..mesh.formats.omezarr import open_store
     from ..mesh.formats.registry import check_shape, split_dataset
     from .surface import is_store
 
-    if split_dataset(args.input)[0].suffix.lower() != ".zarr" or not is_store(args.input):
+    if split_dataset(args.input)[0].suffix.lower() != ".zarr" or not is_store(args.input, args.label):
         return
-    array = store_volume(args.input)[0]  # (the stored type: the read reads it whole, --label or not)
+    # the stored type: the read reads it whole, --label or not (with it, an (X, Y, Z, 1) array is 3D)
+    store = open_store(args.input, channel=args.label is not None)
+    shape = tuple(int(store.array.shape[i]) for i in store.xyz)
     if args.guard:
         hint = "crop it: --guard is not done block by block"
     elif args.label is not None:
@@ -188,7 +190,7 @@ def refuse_store_read_whole(args: argparse.Namespace) -> None:
                 "(--out DIR --volumes .zarr, which takes no --label), or crop it")
     else:
         hint = "flow it block by block (--out DIR --volumes .zarr: each state a step_NNN.zarr store), or crop it"
-    check_shape(array.shape, array.dtype, str(args.input), hint=hint)
+    check_shape(shape, store.array.dtype, str(args.input), hint=hint)
 
 
 def flow_store(args: argparse.Namespace) -> int:

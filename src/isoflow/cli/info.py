@@ -72,9 +72,11 @@ def cmd_info(args: argparse.Namespace) -> int:
     if args.csv:
         raise IsoflowError(f"{args.input}: --csv writes the table of --labels; without it, --json prints the report")
     grid = None
-    if split_dataset(args.input)[0].suffix.lower() == ".zarr" and stored_ndim(args.input) in (2, 3):
+    # with --label a plain (X, Y, Z, 1) array is a 3D label image, as in memory
+    channel = args.label is not None
+    if split_dataset(args.input)[0].suffix.lower() == ".zarr" and stored_ndim(args.input, channel) in (2, 3):
         report = info_of_store(args)
-        placed: dict | None = store_placement(args.input, report.unit)
+        placed: dict | None = store_placement(args.input, report.unit, channel)
     else:
         report, grid, placed = info_in_memory(args)
     if args.json:
@@ -103,14 +105,16 @@ def calibration(obj, unit: str | None, dtype) -> dict:
             "origin": [float(c) + 0.0 for c in corner], "unit": unit, "space": obj.space}
 
 
-def store_placement(path, unit: str | None) -> dict:
+def store_placement(path, unit: str | None, channel: bool = False) -> dict:
     """:func:`calibration` of a zarr store read block by block, from its
     metadata (the volume is not read); ``unit`` as the report found it
-    (read from the axes again, a warning about them would be said twice)."""
+    (read from the axes again, a warning about them would be said twice);
+    ``channel`` as :func:`~isoflow.mesh.formats.omezarr.open_store` takes
+    it."""
     from ..digital.lattice import DigitalObject
     from ..mesh.formats.omezarr import open_store
 
-    store = open_store(path, time=True)
+    store = open_store(path, time=True, channel=channel)
     pitch, origin = store.placement()
     try:
         place = DigitalObject.placement(len(store.xyz), pitch=pitch, origin=origin)
@@ -128,7 +132,7 @@ def info_of_store(args: argparse.Namespace) -> Report:
     refuse_points_option(args, "volume")
     if args.gpu:
         raise IsoflowError(f"{args.input}: --gpu takes volumes that fit in memory; .zarr is read block by block on the host")
-    shape = stored_shape(args.input)
+    shape = stored_shape(args.input, args.label is not None)
     check_input_connectivity(args, len(shape))
     say_plate(args, shape)
     with progress_bar(args, "blocks") as show, label_options(args):

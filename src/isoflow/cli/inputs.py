@@ -488,8 +488,10 @@ isoflow.write_volume(isoflow.DigitalObject(v.volume[:, :, :, 0], pitch=v.spacing
 def one_time_point(path: str | Path, shape: tuple[int, ...], label: float | None = None) -> str:
     """What to do with a 4D volume (read as x, y, z, t) given to a command
     that takes one 3D volume: save one entry of its 4th axis as a 3D file,
-    voxel size and origin kept, and give that. A .npy or TIFF does not say
-    whether that axis is time or channels (RGB), so the line names both.
+    voxel size and origin kept, and give that. A .npy does not say
+    whether that axis is time or channels (RGB), so the line names both;
+    where the file names it (an OME-Zarr image's or a TIFF's ``t``), the line says so
+    (:func:`~isoflow.mesh.formats.registry.fourth_axis_words`).
 
     There is no option that picks a time point: the one line of Python is
     the way, and it names the file as given. It reads that time point
@@ -512,17 +514,20 @@ def one_time_point(path: str | Path, shape: tuple[int, ...], label: float | None
 
     Examples
     --------
-    >>> print(one_time_point("cells.ome.tif", (8, 8, 8, 3)))
+    >>> print(one_time_point("cells.npy", (8, 8, 8, 3)))
     , shape 8x8x8x3 (a 4th axis of 3 entries, time points or channels, read as x, y, z, t); save one entry as 3D \
-and give that: python -c 'import isoflow; isoflow.write_volume(isoflow.read_volume("cells.ome.tif", time=0), "t0.npz")'
+and give that: python -c 'import isoflow; isoflow.write_volume(isoflow.read_volume("cells.npy", time=0), "t0.npz")'
     """
     import json
     import shlex
 
+    from ..mesh.formats.registry import fourth_axis_words
+
+    what, entry = fourth_axis_words(path, shape[-1])
     label_arg = "" if label is None else f", label={label!r}"
     code = f'import isoflow; isoflow.write_volume(isoflow.read_volume({json.dumps(str(path))}{label_arg}, time=0), "t0.npz")'
-    return (f", shape {'x'.join(map(str, shape))} (a 4th axis of {shape[-1]} entries, time points or channels, read "
-            f"as x, y, z, t); save one entry as 3D and give that: python -c {shlex.quote(code)}")
+    return (f", shape {'x'.join(map(str, shape))} ({what}, read as x, y, z, t); save one {entry} as 3D and give "
+            f"that: python -c {shlex.quote(code)}")
 
 
 def refuse_time_series_store(args: argparse.Namespace, needs: str) -> None:
@@ -553,9 +558,10 @@ def refuse_time_series_store(args: argparse.Namespace, needs: str) -> None:
 
     if split_dataset(args.input)[0].suffix.lower() != ".zarr":
         return
-    shape = stored_shape(args.input)
+    label = getattr(args, "label", None)
+    shape = stored_shape(args.input, label is not None)  # with a label, (X, Y, Z, 1) is a 3D label image
     if len(shape) == 4:
-        hint = one_time_point(args.input, shape, getattr(args, "label", None))
+        hint = one_time_point(args.input, shape, label)
         raise IsoflowError(f"{args.input}: {needs}, this one is 4D{hint}")
 
 
@@ -563,11 +569,11 @@ def refuse_time_series_store(args: argparse.Namespace, needs: str) -> None:
 #: takes no --label, so the way to one label is the flow in memory
 BLOCK_LABEL = (", or select one label with --label N in the flow in memory (without --volumes .zarr), or write "
                "its voxels as a store of their own")
-#: the same for a block of 0 and one other value V: the flow in memory reads
-#: a store of 0 and V alone as its mask, with no option (--label V there
-#: selects V where other labels lie in blocks not read yet)
-BLOCK_MASK = (", or flow it in memory (without --volumes .zarr), which reads a store of 0 and {v} alone as its mask "
-              "(and --label {v} there selects {v} of a label image), or write its voxels as a store of their own")
+#: the same for a block of 0 and one other value V, of a store that holds
+#: other values too (a store of 0 and V alone is flowed as V's mask): the
+#: label that block offers
+BLOCK_MASK = (", or select one label with --label {v} in the flow in memory (without --volumes .zarr; {v} is the one "
+              "value other than 0 in that block), or write its voxels as a store of their own")
 
 
 @contextlib.contextmanager

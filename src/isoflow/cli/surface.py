@@ -74,7 +74,7 @@ def surface_of(args: argparse.Namespace) -> int:
         raise IsoflowError(f"{args.output}: --suffix names the files of --labels -o DIR/")
     # a time series refused as in memory, however large (is_store takes 3D stores only)
     refuse_time_series_store(args, "surface needs a 3D object")
-    if is_store(args.input):
+    if is_store(args.input, args.label):
         if streams(args):
             return cmd_surface_store(args)
         refuse_store_beyond_memory(args)
@@ -205,12 +205,13 @@ def read_back(args: argparse.Namespace, out: Path, mesh, obj, comps) -> int:
     return 0
 
 
-def is_store(name: str) -> bool:
-    """A 3D zarr store: its surface is written block by block."""
+def is_store(name: str, label: float | None = None) -> bool:
+    """A 3D zarr store: its surface is written block by block (with a
+    ``label``, a plain array of shape (X, Y, Z, 1) is a 3D label image)."""
     from ..mesh.formats.omezarr import stored_ndim
     from ..mesh.formats.registry import split_dataset
 
-    return split_dataset(name)[0].suffix.lower() == ".zarr" and stored_ndim(name) == 3
+    return split_dataset(name)[0].suffix.lower() == ".zarr" and stored_ndim(name, label is not None) == 3
 
 
 def cmd_surface_store(args: argparse.Namespace) -> int:
@@ -219,8 +220,9 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     from ..digital.connectivity import default_connectivity
     from ..digital.lattice import DigitalObject
     from ..mesh.export import check_float64_corners
-    from ..mesh.formats.omezarr import label_absent, store_volume
+    from ..mesh.formats.omezarr import label_absent, one_value_of_store, open_store, store_volume
     from ..mesh.surface_blocks import EmptySurface, write_surface_blocks
+    from ..scale.arrays import NotBinary
     from .progress import progress_bar, reading_back
 
     refuse_mesh_options(args, ".zarr")
@@ -230,11 +232,23 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     # a placement no file holds: refused before any block
     corners = check_float64_corners(args.input, frame.origin, frame.spacing, array.shape)
     conn = args.connectivity or default_connectivity(3)
+
+    def write(array):
+        return write_surface_blocks(array, args.output, conn, frame=frame, threads=args.threads, progress=show,
+                                    force=args.force, where=args.input, triangulate=args.triangulate,
+                                    comments=surface_comments(args.input, conn))
+
     with progress_bar(args, "blocks") as show, label_options(args):
         try:
-            written = write_surface_blocks(array, args.output, conn, frame=frame, threads=args.threads, progress=show,
-                                           force=args.force, where=args.input, triangulate=args.triangulate,
-                                           comments=surface_comments(args.input, conn))
+            try:
+                written = write(array)
+            except NotBinary:
+                # a store of 0 and one other value is that value's mask, as read_volume reads it
+                value = None if args.label is not None else one_value_of_store(open_store(args.input))
+                if value is None:
+                    raise
+                array = store_volume(args.input, value)[0]
+                written = write(array)
         except EmptySurface:
             if args.label is None:
                 raise

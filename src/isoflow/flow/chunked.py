@@ -417,7 +417,8 @@ class ChunkedFlow(ArrayFlow):
     def start(self, source) -> StoredObject:
         """The input (a zarr store's volume, see :func:`source_volume`),
         cropped, as step 0's store."""
-        from ..mesh.formats.omezarr import open_store
+        from ..mesh.formats.omezarr import one_value_of_store, open_store
+        from ..scale.arrays import NotBinary
 
         volume, place, fill = source_volume(source)
         store = open_store(source)
@@ -427,9 +428,21 @@ class ChunkedFlow(ArrayFlow):
         check_chunks_fit(volume, decoded_chunk_voxels(store.array), self.where, self.workers, self.scheduler,
                          self.slab)
         _, da = import_dask()
+
+        def extents_of(checked):
+            return self._compute(*(da.flatnonzero(checked.any(axis=tuple(a for a in range(3) if a != axis)))
+                                   for axis in range(3)))
+
         checked = volume.map_blocks(_binary_block, dtype=bool, where=str(source), fill=fill)
-        extents = self._compute(*(da.flatnonzero(checked.any(axis=tuple(a for a in range(3) if a != axis)))
-                                  for axis in range(3)))
+        try:
+            extents = extents_of(checked)
+        except NotBinary:
+            # a store of 0 and one other value is that value's mask, as read_volume reads it
+            value = one_value_of_store(store)
+            if value is None:
+                raise
+            checked = volume == value
+            extents = extents_of(checked)
         if not len(extents[0]):
             raise IsoflowError(f"{source}: the object is empty, there is nothing to flow")
         lo = [int(e[0]) for e in extents]
@@ -764,7 +777,7 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
     >>> [s["voxels"] for s in r.steps], sorted(p.name for p in folder.glob("step_*"))
     ([27, 8, 1, 0], ['step_000.zarr', 'step_001.zarr', 'step_002.zarr'])
     """
-    from ..scale.compiled import check_threads
+    from ..scale.compiled import thread_argument
     from .motion import flow_connectivity
     from .run import check_count, max_steps_for, run_engine
 
@@ -775,7 +788,7 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
     steps, max_steps = check_count("steps", steps), check_count("max_steps", max_steps)
     until_topology_change = check_switch(until_topology_change, "until_topology_change", "flow_chunked")
     check_callable(progress, "progress", "progress(step, state)")
-    workers, width = check_threads(workers, "workers"), check_threads(width, "width")
+    workers, width = thread_argument(workers, "workers"), thread_argument(width, "width")
     clear_earlier_run(Path(directory), check_switch(force, "force", "flow_chunked"))
     engine = ChunkedFlow(conn, directory, width=width, slab=slab, scheduler=scheduler, workers=workers)
     state = engine.start(source)

@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from numbers import Real
 
 import numpy as np
 
@@ -129,7 +130,10 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
         if isinstance(pitch, (np.ndarray, list, tuple)) and np.size(pitch) == 1 and np.ndim(pitch) == 1:
             # one number in a one-element array, as DigitalObject takes a pitch (float() refuses it)
             (pitch,) = pitch
-        if isinstance(pitch, (str, bytes, bool, np.bool_)):
+        pitch = scalar_given(pitch)
+        # a voxel size is a real number, as DigitalObject's pitch: float() also read
+        # Decimal("0.5"), which DigitalObject and every other number argument refuse
+        if isinstance(pitch, (str, bytes, bool, np.bool_)) or not isinstance(pitch, Real):
             raise IsoflowError(f"voxelize: pitch must be a positive number, got {given_text(pitch)}")
         try:
             given, pitch = pitch, float(pitch)

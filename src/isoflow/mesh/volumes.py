@@ -220,6 +220,8 @@ def read_volume_as_stored(path: str | os.PathLike, label: int | np.integer | flo
     ('bool', None, 'uint8')
     """
     raw = _read_raw(path, time=time)
+    if label is not None:  # a label image, read as read_labels reads it
+        raw = _one_channel(raw, time)
     return as_object(raw, str(path), label), raw.unit, raw.array.dtype
 
 
@@ -320,6 +322,19 @@ def _read_raw(path: str | os.PathLike, mesh: str | None = None, time: int | np.i
         return fmt.load().read(file, dataset, time=time)
     raw = fmt.load().read(file, dataset)
     return _time_point(raw, check_time(time, np.shape(raw.array), str(path)))
+
+
+def _one_channel(raw: RawVolume, time: int | np.integer | None) -> RawVolume:
+    """A label image's ``raw`` as 3D where its array is 4D with a last axis
+    of one entry and no ``time`` was asked: a 3D segmentation saved with a
+    channel axis (ilastik's HDF5 (z, y, x, 1), an .npy of shape
+    (X, Y, Z, 1)) has one 3D image to read, as NIfTI's reader drops such
+    an axis; ``raw`` itself otherwise. A mask with no label asked stays 4D:
+    its 0/1 values may be a 4D object one voxel thick."""
+    arr = np.asarray(raw.array)
+    if time is None and arr.ndim == 4 and arr.shape[3] == 1:
+        return _time_point(dataclasses.replace(raw, array=arr), 0)
+    return raw
 
 
 def _time_point(raw: RawVolume, time: int) -> RawVolume:
@@ -530,13 +545,8 @@ def read_labels(path: str | os.PathLike, *, time: int | np.integer | None = None
     raw = _read_raw(path, mesh="a mesh, not a label image; voxelize A.stl B.obj --resolution R -o LABELS.nii.gz "
                                "makes one of several meshes (isoflow.voxelize_meshes)", time=time)
     said_of(raw)
+    raw = _one_channel(raw, time)
     arr = np.asarray(raw.array)
-    if time is None and arr.ndim == 4 and arr.shape[3] == 1:
-        # a 3D segmentation saved with a channel axis of one entry (ilastik's
-        # HDF5 (z, y, x, 1), an .npy of shape (X, Y, Z, 1)) has one 3D image
-        # to read, as NIfTI's reader drops such an axis
-        raw = _time_point(dataclasses.replace(raw, array=arr), 0)
-        arr = np.asarray(raw.array)
     if arr.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a label image is read in 3D or 2D, this array is {arr.ndim}D with shape "
                            f"{arr.shape}" + (one_time_point_labels(path) if arr.ndim == 4 else ""))
@@ -578,10 +588,10 @@ _NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 def read_points(path: str | os.PathLike) -> np.ndarray:
     """Integer lattice points from a text file: ``x y z`` (or ``x y``) per
     line, ``#`` starts a comment, blanks or commas separate the numbers. A
-    first line of column names (``x,y,z``, as pandas'
-    ``to_csv(path, index=False)`` writes it) is skipped where the next line
-    holds as many numbers; pandas' index column (``,x,y,z``, its default)
-    is refused, naming ``index=False``.
+    first line of column names (``x,y,z``, as pandas' ``to_csv`` writes
+    it) is skipped where the next line holds as many numbers; where its
+    first name is empty or ``index`` (``,x,y,z``: ``to_csv`` with the
+    frame's index), that first column is the index, not a coordinate.
 
     numpy's compiled reader takes the file when it can; a file it refuses,
     or whose numbers are not all integers in range, is read again line by
@@ -646,9 +656,9 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
         check_fits(6 * path.stat().st_size, f"reading the point list {path}",
                    hint="a volume file (.npy, .zarr) holds points far more compactly")
         try:
-            header = _header_line(path)
-            points = _read_points_fast(path, b"," in head, header)
-            return points if points is not None else _read_points_by_line(path, header)
+            header, index = _header_line(path)
+            points = _read_points_fast(path, b"," in head, header, index)
+            return points if points is not None else _read_points_by_line(path, header, index)
         except IsoflowError as exc:
             raise IsoflowError(not_points(path, str(exc))) from None
     except (OSError, UnicodeDecodeError) as exc:
@@ -710,15 +720,15 @@ volume or mesh format)
     return said
 
 
-def _header_line(path: Path) -> int:
+def _header_line(path: Path) -> tuple[int, bool]:
     """The number of the line that is a header of column names (``x,y,z``,
-    as pandas' ``to_csv(path, index=False)`` writes one), 0 where there is
-    none: the first line that is neither blank nor a comment, where none of
-    its fields is a number and the next such line is as many numbers (a
-    file of words is still refused naming its first line). A header of an
-    unnamed first column and names (``,x,y,z``: pandas' index, which
-    ``to_csv`` writes by default) over rows of as many numbers is refused
-    naming ``index=False``."""
+    as pandas' ``to_csv`` writes one), 0 where there is none: the first
+    line that is neither blank nor a comment, where none of its fields is
+    a number and the next such line is as many numbers (a file of words is
+    still refused naming its first line); and whether its first column is
+    an index (``to_csv`` writes the frame's index first, named ``""``, or
+    ``index`` after ``reset_index``), which is no coordinate: then 2 or 3
+    names follow it."""
     lines = []
     with open(path, encoding="utf-8-sig") as fh:
         for lineno, line in enumerate(fh, 1):
@@ -728,31 +738,26 @@ def _header_line(path: Path) -> int:
                 if len(lines) == 2:
                     break
     if len(lines) < 2:
-        return 0
+        return 0, False
     (lineno, first), (_, second) = lines
     # a header's names are split at commas where it has them ("x (mm), y (mm), z (mm)"), else at blanks
     names = [f.strip() for f in first.split(",")] if "," in first else first.split()
     numbers = _SPLIT.split(second)
-    # pandas' to_csv writes its index by default: an unnamed first column
-    # (",x,y,z") before the coordinates on every row, which no point has
-    if (len(names) - 1 in (2, 3) and not names[0] and all(names[1:]) and len(numbers) == len(names)
-            and not any(_NUMBER.fullmatch(f) for f in names[1:]) and all(_NUMBER.fullmatch(f) for f in numbers)):
-        raise IsoflowError(f"{path}:{lineno}: a header {first!r} whose first column has no name, as pandas' "
-                           "to_csv writes its index: every row holds that index before the coordinates; "
-                           "write the points with to_csv(path, index=False)")
-    if (len(names) != len(numbers) or len(names) not in (2, 3) or any(_NUMBER.fullmatch(f) for f in names)
-            or not all(_NUMBER.fullmatch(f) for f in numbers)):
-        return 0
-    return lineno
+    index = "," in first and len(names) in (3, 4) and names[0].lower() in ("", "index")
+    if (len(names) != len(numbers) or len(names) - index not in (2, 3)
+            or any(_NUMBER.fullmatch(f) for f in names) or not all(_NUMBER.fullmatch(f) for f in numbers)):
+        return 0, False
+    return lineno, index
 
 
-def _read_points_fast(path: Path, commas: bool, header: int = 0) -> np.ndarray | None:
+def _read_points_fast(path: Path, commas: bool, header: int = 0, index: bool = False) -> np.ndarray | None:
     """The points by ``np.loadtxt`` (as integers, else as decimals that
     must be integers: "1e3", "2.0"), or None where the file needs the
     line-by-line reader: to be refused with its line, or for separators
     loadtxt does not take (blanks and commas mixed). loadtxt's own parser
     refuses empty fields and "1_000"; it takes "nan" and "inf", refused
-    here. The lines up to ``header`` (:func:`_header_line`) are skipped."""
+    here. The lines up to ``header`` (:func:`_header_line`) are skipped,
+    and the first column where it is an ``index``."""
     import warnings
 
     for dtype in (np.int64, np.float64):
@@ -766,6 +771,8 @@ def _read_points_fast(path: Path, commas: bool, header: int = 0) -> np.ndarray |
             continue
     else:
         return None
+    if index:  # (read with the rest: a line whose index is no number is the line reader's to name)
+        values = values[:, 1:]
     if values.size == 0 or values.shape[1] not in (2, 3):
         return None
     if dtype is np.float64 and not (np.isfinite(values).all() and (values == np.round(values)).all()):
@@ -775,10 +782,11 @@ def _read_points_fast(path: Path, commas: bool, header: int = 0) -> np.ndarray |
     return values.astype(np.int64, copy=False)
 
 
-def _read_points_by_line(path: Path, header: int = 0) -> np.ndarray:
+def _read_points_by_line(path: Path, header: int = 0, index: bool = False) -> np.ndarray:
     """The points, read line by line as a stream (8 bytes a coordinate, as
     loadtxt); the first bad line is refused with its number. The lines up
-    to ``header`` (:func:`_header_line`) are skipped."""
+    to ``header`` (:func:`_header_line`) are skipped, and the first number
+    of each line where it is an ``index``."""
     from array import array
 
     coords, width = array("q"), None
@@ -786,7 +794,7 @@ def _read_points_by_line(path: Path, header: int = 0) -> np.ndarray:
         for lineno, line in enumerate(fh, 1):
             if lineno <= header:
                 continue
-            point = _point(path, lineno, line, width)
+            point = _point(path, lineno, line, width, index)
             if point:
                 width = len(point)
                 coords.extend(point)
@@ -795,10 +803,11 @@ def _read_points_by_line(path: Path, header: int = 0) -> np.ndarray:
     return np.frombuffer(coords, dtype=np.int64).reshape(-1, width).copy()
 
 
-def _point(path: Path, lineno: int, line: str, width: int | None) -> list[int]:
+def _point(path: Path, lineno: int, line: str, width: int | None, index: bool = False) -> list[int]:
     """The coordinates on one line of a point list (none for a blank or
     comment line), or the error naming the line; ``width``: the number of
-    coordinates of the lines before (None for the first point)."""
+    coordinates of the lines before (None for the first point); ``index``:
+    the line's first number is its row's index, no coordinate."""
     line = line.split("#", 1)[0].strip()
     if not line:
         return []
@@ -807,6 +816,7 @@ def _point(path: Path, lineno: int, line: str, width: int | None) -> list[int]:
         if not _NUMBER.fullmatch(f):
             shown = f"empty coordinate in {line!r}" if not f else f"not a number: {f!r}"
             raise IsoflowError(f"{path}:{lineno}: {shown}")
+    fields = fields[index:]
     if width is None and len(fields) not in (2, 3):
         raise IsoflowError(f"{path}:{lineno}: expected 2 or 3 coordinates, got {len(fields)}")
     if width is not None and len(fields) != width:

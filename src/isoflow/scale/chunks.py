@@ -594,6 +594,45 @@ def spatial_axes(names, shape, where: str, time: bool = False) -> tuple[list[int
     return xyz, other
 
 
+def fourth_axis_name(path: str | os.PathLike) -> str | None:
+    """The name the metadata gives the 4th axis of a zarr store's volume
+    read as (x, y, z, t): an OME-Zarr image's (``"t"``, the time axis kept
+    beside x, y and z), a plain array's last dimension name where zarr's
+    ``dimension_names`` are x, y, z and one more; None where the store
+    names none, or cannot be opened (the words of a message: no error of
+    their own).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``STORE.zarr`` or ``IMAGE.zarr:LEVEL``.
+
+    Returns
+    -------
+    str or None
+        The name, lower case.
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> _ = zarr.create_array(str(folder / "c.zarr"), shape=(4, 5, 6, 3), dtype="u1", dimension_names=list("xyzc"))
+    >>> _ = zarr.create_array(str(folder / "u.zarr"), shape=(4, 5, 6, 3), dtype="u1")
+    >>> fourth_axis_name(folder / "c.zarr"), fourth_axis_name(folder / "u.zarr")
+    ('c', None)
+    """
+    try:
+        array, multiscale, _ = open_zarr_node(*split_store(path))
+        if multiscale is not None:
+            names = axis_names(multiscale, array.ndim, str(path))
+            xyz = spatial_axes(names, array.shape, str(path), time=True)[0]
+            return names[xyz[3]] if len(xyz) == 4 else None
+        names = [str(n).lower() for n in getattr(array.metadata, "dimension_names", None) or ()]
+    except Exception:  # zarr raises many types; the words fall back to "time points or channels"
+        return None
+    return names[3] if names[:3] == ["x", "y", "z"] and len(names) == 4 else None
+
+
 def split_store(path: str | os.PathLike, suffixes: tuple[str, ...] = ("zarr",)) -> tuple[Path, str | None]:
     """The file or store a path names and the name after its colon:
     ``IMAGE.zarr:1`` -> (IMAGE.zarr, '1'), a resolution level or an array of

@@ -52,7 +52,7 @@ from collections.abc import Iterator
 from functools import cache
 from typing import TYPE_CHECKING, Literal
 
-from ..errors import IsoflowError, choice_of, given_text
+from ..errors import IsoflowError, choice_of, given_text, scalar_given
 
 if TYPE_CHECKING:
     import numpy as np
@@ -262,6 +262,51 @@ def check_threads(n, where: str = "threads") -> int:
     return value
 
 
+def thread_argument(value: object, name: str = "threads") -> int:
+    """A thread count given to a Python function: an integer >= 1, as the
+    other integer arguments take one (``int``, a NumPy integer or a 0D array
+    of one); anything else refused naming ``name``.
+
+    :func:`check_threads` reads a count from text (the command line, the
+    environment), and so took ``"8"``, ``Fraction(8)`` and ``Decimal("8")``
+    (their text is ``8``) where ``8.0`` was refused.
+
+    Parameters
+    ----------
+    value : object
+        The count given: an ``int``, a NumPy integer or a 0D array of one.
+    name : str, default "threads"
+        The argument, as the refusal names it.
+
+    Returns
+    -------
+    int
+        The count, a Python int.
+
+    Raises
+    ------
+    IsoflowError
+        Where ``value`` is no such integer, or is below 1.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fractions import Fraction
+    >>> thread_argument(8), thread_argument(np.array(8)), thread_argument(np.int32(2), "workers")
+    (8, 8, 2)
+    >>> thread_argument(Fraction(8))
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: threads must be a positive integer, got Fraction(8, 1)
+    """
+    import numpy as np
+
+    value = scalar_given(value)
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise IsoflowError(f"{name} must be a positive integer, got {given_text(value)}")
+    return int(value)
+
+
 def check_env_threads() -> None:
     """Refuse an :data:`ENV` that is not a thread count before any work:
     read only where a compiled pass runs, it passed unseen on a small input
@@ -331,11 +376,7 @@ def using(threads: int | np.integer | None):
     if threads is None:
         yield
         return
-    if isinstance(threads, (str, bytes)):
-        # a text is a count in the environment and on the command line; an
-        # argument is a number, as the message says
-        raise IsoflowError(f"threads must be a positive integer, got {given_text(threads)}")
-    token = _asked.set(check_threads(threads))
+    token = _asked.set(thread_argument(threads))
     try:
         yield
     finally:

@@ -49,6 +49,7 @@ from numpy.typing import ArrayLike
 from ...digital.lattice import DigitalObject
 from ...digital.report import Report
 from ...errors import IsoflowError, check_path, counted, warn
+from ...scale.arrays import NotBinary
 from ...scale.chunks import axis_names, never_written, open_zarr_node, spatial_axes, split_store, unwritten_fill
 from .registry import (
     UDUNITS,
@@ -331,13 +332,19 @@ class StoreArray:
         if self.multiscale is None:
             attrs = dict(getattr(self.array, "attrs", {}) or {})
             if "pitch" in attrs and "origin" in attrs:
-                return np.asarray(attrs["pitch"], np.float64), np.asarray(attrs["origin"], np.float64)
+                return tuple(self._own_axes(np.asarray(attrs[k], np.float64)) for k in ("pitch", "origin"))  # type: ignore[return-value]
             return None, None
         scale, shift = placement_of(self.multiscale, self.dataset, self.array.ndim, self.where, self.xyz)
         factors = self.units[0]
         if len(self.xyz) == 4:  # (a time axis: its step as it is)
             factors = np.append(factors, 1.0)
         return scale[self.xyz] * factors, (shift[self.xyz] - scale[self.xyz] / 2) * factors
+
+    def _own_axes(self, value: np.ndarray) -> np.ndarray:
+        """A plain array's attribute of one entry per stored axis, of the
+        x, y, z axes alone (a channel axis read at 0 has none); one number
+        for every axis, or another count, as it is (checked where used)."""
+        return value[self.xyz] if value.ndim == 1 and len(value) == self.array.ndim else value
 
     def unit(self) -> str | None:
         """The length unit of the placement (:func:`axis_unit`)."""
@@ -349,7 +356,7 @@ class StoreArray:
         return axis_unit(self.multiscale, self.xyz, self.where)
 
 
-def open_store(path: str | os.PathLike, time: bool = False) -> StoreArray:
+def open_store(path: str | os.PathLike, time: bool = False, channel: bool = False) -> StoreArray:
     """A zarr store's volume array with its axes matched by name, not
     read: what the block-by-block readers share.
 
@@ -363,6 +370,11 @@ def open_store(path: str | os.PathLike, time: bool = False) -> StoreArray:
         as a fourth entry of ``xyz``, as :func:`read` reads it (see
         :func:`~isoflow.scale.chunks.spatial_axes`); by default it is
         refused.
+    channel : bool
+        A plain array of shape (X, Y, Z, 1) is a 3D label image saved with
+        a channel axis of one entry: its x, y, z axes are the first three,
+        the last indexed at 0, as :func:`isoflow.read_labels` reads such a
+        file (and ``read_volume`` with a ``label``). By default it is 4D.
 
     Returns
     -------
@@ -389,24 +401,30 @@ def open_store(path: str | os.PathLike, time: bool = False) -> StoreArray:
     >>> g.attrs["multiscales"] = [{"axes": ["t", "z", "y", "x"], "datasets": [{"path": "t"}]}]
     >>> open_store(f"{d}:t", time=True).xyz
     [3, 2, 1, 0]
+    >>> _ = zarr.open_array(str(d.parent / "x1.zarr"), mode="w", shape=(4, 5, 6, 1), dtype="u1")
+    >>> open_store(d.parent / "x1.zarr").xyz, open_store(d.parent / "x1.zarr", channel=True).xyz
+    ([0, 1, 2, 3], [0, 1, 2])
     """
     file, level = split_dataset(path)
     where = str(path)
     array, multiscale, dataset = open_zarr_node(file, level)
     if multiscale is None:
+        if channel and array.ndim == 4 and array.shape[3] == 1:
+            return StoreArray(array, where, None, None, [0, 1, 2], [3])
         return StoreArray(array, where, None, None, list(range(array.ndim)), [])
     xyz, other = spatial_axes(axis_names(multiscale, array.ndim, where), array.shape, where, time=time)
     return StoreArray(array, where, multiscale, dataset, xyz, other)
 
 
-def stored_ndim(path) -> int:
+def stored_ndim(path, channel: bool = False) -> int:
     """The dimension of a zarr store's volume (``IMAGE.zarr:LEVEL`` too):
     its x, y and z axes in an OME-Zarr image (and a time axis of several
-    entries beside them: 4), every axis of a plain array."""
-    return len(stored_shape(path))
+    entries beside them: 4), every axis of a plain array (``channel``: but
+    a last axis of one entry, see :func:`open_store`)."""
+    return len(stored_shape(path, channel))
 
 
-def stored_shape(path: str | os.PathLike) -> tuple[int, ...]:
+def stored_shape(path: str | os.PathLike, channel: bool = False) -> tuple[int, ...]:
     """The shape of a zarr store's volume as :func:`read` gives it, from
     the metadata alone (the volume is not read).
 
@@ -414,6 +432,9 @@ def stored_shape(path: str | os.PathLike) -> tuple[int, ...]:
     ----------
     path : str or os.PathLike
         ``STORE.zarr`` or ``IMAGE.zarr:LEVEL``.
+    channel : bool
+        A plain array's last axis of one entry is no axis of the volume
+        (a label image's channel, :func:`open_store`).
 
     Returns
     -------
@@ -430,7 +451,7 @@ def stored_shape(path: str | os.PathLike) -> tuple[int, ...]:
     (5, 4, 3, 2)
     """
     import_library("zarr", "OME-Zarr")
-    store = open_store(path, time=True)
+    store = open_store(path, time=True, channel=channel)
     return tuple(int(store.array.shape[i]) for i in store.xyz)
 
 
@@ -509,11 +530,93 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | np.integer | None 
         # would give its measures in voxels; read_volume and info refuse it too, naming IMG.zarr:0
         refuse_inside_store(file, path)
     import_library("zarr", "OME-Zarr")
-    own = store_place(open_store(path), path)
+    store = open_store(path)
+    own = store_place(store, path)
     given = {"pitch": pitch, "origin": origin, "unit": unit}
     place = {k: own[k] if v is None else v for k, v in given.items()}
-    return analyze_zarr_volume(path, connectivity, block_shape=block_shape, scheduler=scheduler, surfaces=surfaces,
-                                threads=threads, progress=progress, **place)
+    options = {"block_shape": block_shape, "scheduler": scheduler, "surfaces": surfaces, "threads": threads,
+               "progress": progress}
+    try:
+        return analyze_zarr_volume(path, connectivity, **options, **place)  # type: ignore[arg-type]
+    except NotBinary:
+        # a store of 0 and one other value is that value's mask, as read_volume reads it
+        value = one_value_of_store(store)
+        if value is None:
+            raise
+    return analyze_value(store, value, connectivity, place, **options)
+
+
+def one_value_of_store(store: StoreArray) -> object | None:
+    """The value ``v`` of a store whose only value other than 0 is one
+    ``v`` other than 1 (a mask written 0/255), found in passes over the
+    store; None where it holds another value too (a label image).
+
+    :func:`isoflow.read_volume` reads such an array as the mask of ``v``
+    (:func:`~isoflow.mesh.volumes.one_value_mask`), and so do the readers
+    of a store block by block, which call this once a block holds a value
+    other than 0 and 1: the blocks alone cannot tell a mask written 0/255
+    from a label image whose other labels lie in blocks not read yet.
+
+    Parameters
+    ----------
+    store : StoreArray
+        The store, as :func:`open_store` opens it.
+
+    Returns
+    -------
+    number or None
+        ``v``, a NumPy scalar of the array's type, or None.
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> path = Path(tempfile.mkdtemp()) / "m.zarr"
+    >>> z = zarr.create_array(str(path), shape=(4, 4, 4), chunks=(2, 2, 2), dtype="u1")
+    >>> z[1:3, 1:3, 1:3] = 255
+    >>> one_value_of_store(open_store(path))
+    np.uint8(255)
+    >>> z[0, 0, 0] = 7
+    >>> one_value_of_store(open_store(path)) is None
+    True
+    """
+    from ...scale.chunks import import_dask
+
+    _, da = import_dask()
+    lazy = store.lazy()
+    if lazy.dtype.kind not in "iuf" or not lazy.size:
+        return None
+    low, high = da.compute(lazy.min(), lazy.max())
+    value = high if high != 0 else low
+    if value == 1 or value == 0 or not np.isfinite(value) or (low != 0 and high != 0 and low != high):
+        return None
+    return value if bool(((lazy == 0) | (lazy == value)).all().compute()) else None
+
+
+def analyze_value(store: StoreArray, value, connectivity: int | None, place: dict, **options: Any) -> Report:
+    """The report of the voxels of ``store`` equal to ``value`` (a label,
+    or the one value of a mask written 0/255), block by block, placed by
+    ``place`` (:func:`store_place`); ``options`` as
+    :func:`~isoflow.digital.outofcore.analyze_in_xyz` takes them.
+
+    Examples
+    --------
+    Label 5 of two, a ring around label 3:
+
+    >>> import tempfile, zarr
+    >>> labels = np.full((5, 5, 1), 5, np.uint16)
+    >>> labels[2, 2, 0] = 3
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> zarr.create_array(str(folder / "l.zarr"), data=labels, chunks=(3, 3, 1))[...].max()
+    np.uint16(5)
+    >>> store = open_store(folder / "l.zarr")
+    >>> analyze_value(store, 5, 6, store_place(store, folder))["betti"]
+    [1, 1, 0]
+    """
+    from ...digital.outofcore import analyze_in_xyz
+
+    # the lazy array drops the other axes: the x, y, z ones, in stored order, are left
+    order = [int(i) for i in np.argsort(np.argsort(store.xyz))]
+    return analyze_in_xyz(store.lazy() == value, order, connectivity, where=store.where, **options, **place)
 
 
 def analyze_store(path, connectivity: int | None = None, label=None, progress=None, *,
@@ -526,18 +629,22 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
     A ``label`` that no voxel has is refused, as :func:`isoflow.read_volume`
     refuses it (the values present are then read in a second pass). The
     world measures are placed as :func:`read` places the volume."""
-    from ...digital.outofcore import analyze_in_xyz, analyze_zarr_volume
+    from ...digital.outofcore import analyze_zarr_volume
 
     import_library("zarr", "OME-Zarr")
-    store = open_store(path)
+    store = open_store(path, channel=label is not None)  # a label image: (X, Y, Z, 1) is 3D
     place = store_place(store, path)
     if label is None:
-        return analyze_zarr_volume(path, connectivity, progress=progress, surfaces=surfaces, threads=threads, **place)
+        try:
+            return analyze_zarr_volume(path, connectivity, progress=progress, surfaces=surfaces, threads=threads,
+                                       **place)
+        except NotBinary:
+            # a store of 0 and one other value is that value's mask, as read_volume reads it
+            label = one_value_of_store(store)
+            if label is None:
+                raise
     label = check_label(label, store.array.dtype, store.where)
-    # the lazy array drops the other axes: the x, y, z ones, in stored order, are left
-    order = [int(i) for i in np.argsort(np.argsort(store.xyz))]
-    report = analyze_in_xyz(store.lazy() == label, order, connectivity, where=store.where, progress=progress,
-                            surfaces=surfaces, threads=threads, **place)
+    report = analyze_value(store, label, connectivity, place, progress=progress, surfaces=surfaces, threads=threads)
     if report["voxels"] == 0:
         raise label_absent(path, label)
     never_written(store.where, unwritten_fill(store.array, label), label)
@@ -552,7 +659,7 @@ def label_absent(path, label) -> IsoflowError:
     from ...scale.chunks import import_dask
 
     _, da = import_dask()
-    store = open_store(path)
+    store = open_store(path, channel=True)
     return no_such_label(label, np.unique(da.unique(store.lazy()).compute()), store.where, len(store.xyz))
 
 
@@ -583,7 +690,7 @@ def store_volume(path, label=None) -> tuple:
     from ...scale.chunkcache import ChunkReader
 
     import_library("zarr", "OME-Zarr")
-    store = open_store(path)
+    store = open_store(path, channel=label is not None)  # a label image: (X, Y, Z, 1) is 3D
     if len(store.xyz) != 3:
         raise IsoflowError(f"{store.where}: surface needs a 3D volume, this store holds {len(store.xyz)}D")
     pitch, origin = store.placement()

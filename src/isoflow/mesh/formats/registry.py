@@ -33,7 +33,7 @@ from ...digital.frames import frame_text
 from ...digital.lattice import DigitalObject
 from ...digital.units import LENGTH_UNITS, length_unit, unit_factor
 from ...errors import IsoflowError, given_text, number_text, warn
-from ...scale.chunks import spatial_axes, split_store
+from ...scale.chunks import fourth_axis_name, spatial_axes, split_store
 
 #: the extra that brings every format library (pip install 'isoflow[formats]')
 EXTRA = "formats"
@@ -678,11 +678,53 @@ def check_time(time, shape, where: str) -> int:
     return int(time)
 
 
+def fourth_axis_words(path: str | os.PathLike, count: int | None = None) -> tuple[str, str]:
+    """What the 4th axis of a 4D volume read as (x, y, z, t) holds, as a
+    refusal says it, and what one entry of it is called: a time series
+    where the file names the axis ``t`` (an OME-Zarr image's time axis, a
+    zarr array's dimension name, a TIFF's ``T``), channels where it names
+    it ``c``, else "time points or channels" (a .npy does not say which).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file, as given.
+    count : int, optional
+        The entries along the axis, where the words give them.
+
+    Returns
+    -------
+    tuple of str
+        The words, and one entry's name (``"time point"``, ``"channel"``,
+        ``"entry"``).
+
+    Examples
+    --------
+    >>> fourth_axis_words("cells.npy", 3)
+    ('a 4th axis of 3 entries, time points or channels', 'entry')
+    >>> fourth_axis_words("cells.ome.tif", 3)
+    ("a time series of 3 time points along its 4th axis 't'", 'time point')
+    >>> fourth_axis_words("cells.npy")
+    ('a 4th axis of time points or channels', 'entry')
+    """
+    suffix = split_store(path)[0].suffix.lower()
+    # a TIFF is read as 4D only where its axes (OME-XML's, ImageJ's) hold a T
+    # of several entries beside Z, Y, X (:func:`to_xyz`): a time series
+    name = fourth_axis_name(path) if suffix == ".zarr" else "t" if suffix in (".tif", ".tiff") else None
+    entries = "" if count is None else f"{count} "
+    if name == "t":
+        return f"a time series of {entries}time points along its 4th axis 't'", "time point"
+    if name == "c":
+        return f"{entries}channels along its 4th axis 'c'", "channel"
+    if count is None:
+        return "a 4th axis of time points or channels", "entry"
+    return f"a 4th axis of {count} entries, time points or channels", "entry"
+
+
 def one_time_point_labels(path: str | os.PathLike) -> str:
     """The end of the refusal of a 4D label image (read as x, y, z, t; its
-    4th axis time points or channels, which a .npy or TIFF does not say):
-    how to take one entry of it, in Python and as a 3D file that every
-    command reads.
+    4th axis what :func:`fourth_axis_words` says): how to take one entry of
+    it, in Python and as a 3D file that every command reads.
 
     Examples
     --------
@@ -694,8 +736,9 @@ def one_time_point_labels(path: str | os.PathLike) -> str:
     import json
     import shlex
 
+    what, entry = fourth_axis_words(path)
     code = f'import isoflow; isoflow.write_labels(isoflow.read_labels({json.dumps(str(path))}, time=0), "t0.npz")'
-    return (f" (a 4th axis of time points or channels, read as x, y, z, t): read one entry with read_labels(path, "
+    return (f" ({what}, read as x, y, z, t): read one {entry} with read_labels(path, "
             f"time=0), or save it as 3D and give that: python -c {shlex.quote(code)}")
 
 
