@@ -606,7 +606,7 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
                   step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
                   target: int | None = None, progress=None, on_resolution=None,
                   strict: bool = False, fill: Fill = "winding", bodies: int | None = None,
-                  t_junctions: bool = True) -> tuple[list, Stop | None]:
+                  t_junctions: bool = True, joined: int | None = None) -> tuple[list, Stop | None]:
     """Digital topology of the voxelised solid at ``resolutions`` and then,
     while ``step`` and the Betti numbers of the last two differ (or agree on
     a genus other than ``target``, or on components other than ``bodies``:
@@ -623,7 +623,10 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
     resolution. ``on_resolution(entry)`` is called after each. ``fill``
     is the voxels compared (:mod:`isoflow.mesh.fills`); ``t_junctions``
     False: the mesh's T-junctions are split already, or none closes
-    (:func:`~isoflow.mesh.voxelize.voxelize` looks for none).
+    (:func:`~isoflow.mesh.voxelize.voxelize` looks for none). ``joined``:
+    the components the voxels keep at every resolution where they join
+    bodies that touch (:func:`touch_joined_bodies`), settled on as
+    ``bodies`` is.
     """
     import time
 
@@ -638,7 +641,8 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
             res = todo.pop(0)
         else:
             res, stop = next_resolution(out, target, step=step, max_resolution=max_resolution,
-                                        time_limit=time_limit, elapsed=time.monotonic() - start, bodies=bodies)
+                                        time_limit=time_limit, elapsed=time.monotonic() - start, bodies=bodies,
+                                        joined=joined)
             if res is None:
                 return out, stop
         weight = res**3
@@ -663,16 +667,18 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
 
 
 def next_resolution(done: list, target: int | None, *, step: bool, max_resolution: int, time_limit: float,
-                    elapsed: float, bodies: int | None = None) -> tuple[int | None, Stop | None]:
+                    elapsed: float, bodies: int | None = None,
+                    joined: int | None = None) -> tuple[int | None, Stop | None]:
     """The resolution to try after ``done`` (twice the last), or None with
     why not: the Betti numbers settled on ``target`` and, where given,
-    ``bodies`` components (no :class:`Stop`), or
+    ``bodies`` components, or ``joined``, those no grid parts (no
+    :class:`Stop`), or
     a limit (the time that ``elapsed`` seconds leave, the memory budget).
     ``max_resolution`` caps the doubling only: where the resolutions asked
     already pass it, they are what ended the stepping (a Stop "asked")."""
     stable = len(done) >= 2 and done[-1]["betti"] == done[-2]["betti"]
     if stable and (target is None or done[-1]["genus"] == target) and (bodies is None or
-                                                                       done[-1]["betti"][0] == bodies):
+                                                                       done[-1]["betti"][0] in (bodies, joined)):
         return None, None
     if not step:
         return None, Stop("asked")
@@ -969,7 +975,8 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
         digital, stop = digital_steps(
             *voxelised, resolutions, connectivity, step=step and not w["crossing_self"], max_resolution=max_resolution,
             time_limit=time_limit, target=target, progress=progress, on_resolution=on_resolution,
-            strict=strict, fill=fill, bodies=bodies, t_junctions=t_junctions)
+            strict=strict, fill=fill, bodies=bodies, t_junctions=t_junctions,
+            joined=None if contacts is not None else touch_joined_bodies(w, f, connectivity, fill, bodies))
     except IsoflowError as exc:
         raise exc.at(name) from None  # a refused grid keeps its command-line words
     stable = len(digital) >= 2 and digital[-1]["betti"] == digital[-2]["betti"]
@@ -1312,6 +1319,61 @@ def rounding_notes(v: np.ndarray, f: np.ndarray, w: dict, stats: dict) -> list[N
              "non-manifold edges": mesh["nonmanifold_edges"], "non-manifold vertices": mesh["nonmanifold_vertices"],
              "zero-area faces": w["zero_area_faces"]}
     return [Note("float64_rounding", {**facts, "defects": [k for k, n in found.items() if n]})]
+
+
+def touch_joined_bodies(w: dict, faces: np.ndarray, connectivity: int, fill: Fill, bodies: int | None) -> int | None:
+    """The components the voxels keep at every resolution where they join
+    solids that touch at a point or along an edge (26-connected, or a
+    flood fill's shared shell voxels: :func:`_corner_joined`), fewer than
+    the solid's ``bodies``; None where that count is not known, or not
+    fewer.
+
+    It is known where the bodies touch only at vertices they share: no
+    face crosses or touches another component, no shell nests in another
+    and the solid has no cavity, so each group of faces joined through
+    shared vertices (trimesh's ``body_count``) is one component at any
+    grid fine enough to part what does not touch.
+
+    Parameters
+    ----------
+    w : dict
+        The witnesses (:func:`witnesses`).
+    faces : numpy.ndarray
+        The mesh's faces (M, 3), as counted there.
+    connectivity : int
+        The digital rows' connectivity.
+    fill : str
+        The voxels compared.
+    bodies : int or None
+        The solid's bodies (:func:`reference_bodies`).
+
+    Returns
+    -------
+    int or None
+
+    Examples
+    --------
+    Two tetrahedra on a common corner (vertex 0), one body each:
+
+    >>> f = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3],
+    ...               [0, 4, 5], [0, 5, 6], [0, 6, 4], [4, 6, 5]])
+    >>> w = {"mesh": {"shared_vertices": 1, "nonmanifold_vertices": 0, "nonmanifold_edges": 0},
+    ...      "faces_crossing_other_components": 0, "nested": False, "solid": {"cavities": 0}}
+    >>> touch_joined_bodies(w, f, 26, "winding", 2), touch_joined_bodies(w, f, 6, "winding", 2)
+    (1, None)
+    """
+    from ..scale.graphs import components
+
+    mesh = w["mesh"]
+    touch = mesh["shared_vertices"] or mesh["nonmanifold_vertices"] or mesh["nonmanifold_edges"]
+    if bodies is None or not touch or not (connectivity == 26 or fill == "flood"):
+        return None
+    if w["faces_crossing_other_components"] or w["nested"] or w["solid"].get("cavities") != 0:
+        return None  # bodies joined otherwise than at shared vertices, or shells that are no body
+    used, index = np.unique(faces, return_inverse=True)
+    index = index.reshape(faces.shape)
+    groups = components(len(used), np.r_[index[:, 0], index[:, 1]], np.r_[index[:, 1], index[:, 2]])[0]
+    return groups if groups < bodies else None
 
 
 def _corner_joined(w: dict, last: dict, bodies: int | None, fill: Fill) -> bool:
