@@ -312,3 +312,36 @@ def test_bodies_closer_than_a_voxel_still_step_26_connected(tmp_path):
     assert d["digital"][0]["betti"][0] == 1  # the gap closed at 8 across (a voxel of 0.375)
     assert [e["betti"][:2] for e in d["digital"][-2:]] == [[mesh.body_count, 0]] * 2
     assert d["stop"] is None
+
+
+def test_crossing_components_facing_opposite_ways_are_no_union(tmp_path):
+    """A ball crossing an inside-out ball: by the nonzero rule the solid is
+    each ball less the other (the lens they share has winding 0), which
+    manifold3d is not asked to build; the outward ball less the inside-out
+    one stands in (``solid.approximate``). The verdict said "the solid they
+    bound is their union", and the solid row "manifold3d's union of the
+    components", of a solid whose volume is not the union's."""
+    m3 = pytest.importorskip("manifold3d")
+    a = trimesh.creation.icosphere(2)
+    b = trimesh.creation.icosphere(2)
+    b.invert()
+    b.apply_translation([1, 0, 0])
+    trimesh.util.concatenate([a, b]).export(tmp_path / "balls.ply")
+
+    def solid(m, turn=False):
+        f = m.faces[:, ::-1] if turn else m.faces
+        return m3.Manifold(m3.Mesh(m.vertices.astype(np.float32), np.ascontiguousarray(f, np.uint32)))
+
+    union = (solid(a) + solid(b, turn=True)).volume()
+    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "balls.ply"), "--resolution", "16",
+                        "32", "--no-step"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    d = json.loads(subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "balls.ply"),
+                                   "--resolution", "16", "32", "--no-step", "--json"],
+                                  capture_output=True, text=True).stdout)
+    assert d["solid"]["approximate"] is True
+    assert abs(d["solid"]["volume"] - union) > 0.1 * union  # not the union of the two
+    [row] = [line for line in r.stdout.splitlines() if line.strip().startswith("solid ")]
+    assert "union of the components" not in row and "approximate" in row
+    assert "is their union" not in d["verdict"]
+    assert "the outward components less the inside-out ones" in d["verdict"]

@@ -128,7 +128,9 @@ def format_genus(report, name: str) -> str:
                            f"(genus() of the whole mesh: {m3['genus_whole_mesh']})"),
         "  solid       " + (f"genus {solid['genus']}, {counted(solid['bodies'], 'body', 'bodies')}, "
                             f"{counted(solid['cavities'], 'cavity', 'cavities')}, {_volume(solid['volume'])} "
-                            "(manifold3d's union of the components)" + _filled_words(report)
+                            + ("(manifold3d: the outward components less the inside-out ones, approximate)"
+                               if solid.get("approximate") else "(manifold3d's union of the components)")
+                            + _filled_words(report)
                             if "genus" in solid else f"none ({solid['error']})"),
         "  pymeshlab   " + (f"genus {pm.get('genus')}" + (f" ({pm['error']})" if "error" in pm else
                                                         _open_words(pm.get("boundary_edges", 0)))),

@@ -1298,7 +1298,8 @@ def shape_notes(w: dict, kind: VerdictKind, fill: Fill = "winding", contacts: di
         notes.append(Note("overlap", {
             "components": mesh["components"], "crossing": w["faces_crossing_other_components"] or 0,
             "shared": mesh["shared_vertices"], "solid_genus": w["solid_genus"], "error": w["solid"].get("error"),
-            **({"touching": w["faces_touching_own_component"]} if w["faces_touching_own_component"] else {})}))
+            **({"touching": w["faces_touching_own_component"]} if w["faces_touching_own_component"] else {}),
+            **({"approximate": True} if w["solid"].get("approximate") else {})}))
     if w["crossing_self"] and kind != "self_intersecting":
         notes.append(Note("self_intersecting", {"n": w["self_intersecting_faces"]}))
     if w["zero_area_faces"]:
