@@ -16,7 +16,8 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.add_argument("mesh", help="a mesh file: any format trimesh reads")
     # extend: "--resolution 32 --resolution 64" tries both, as "--resolution 32 64" does
     p.add_argument("--resolution", type=resolution_value, nargs="+", action="extend",
-                   help="voxels along the longest side, tried first (default: 64 128; repeated, all are tried); "
+                   help="voxels along the longest side, tried first (default: 64 128, or --max-resolution and "
+                        "its half where that is below 128; repeated, all are tried); "
                         "then doubled until the digital Betti numbers of the last two agree")
     p.add_argument("--max-resolution", type=resolution_value,
                    help="stop doubling beyond this (default 1024); the resolutions given are tried whatever it says")
@@ -38,10 +39,10 @@ def check_limits(args: argparse.Namespace) -> None:
 
 
 def cmd_genus(args: argparse.Namespace) -> int:
-    from ..mesh.genus import DEFAULT_RESOLUTIONS, verify_genus
+    from ..mesh.genus import verify_genus
 
     check_limits(args)
-    res = args.resolution or list(DEFAULT_RESOLUTIONS)
+    res = args.resolution  # None: the defaults within --max-resolution (default_resolutions)
     kw = {k: v for k, v in (("max_resolution", args.max_resolution), ("time_limit", args.time_limit)) if v is not None}
     with progress_bar(args, "genus") as show:
 

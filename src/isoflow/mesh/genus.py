@@ -597,6 +597,31 @@ DEFAULT_RESOLUTIONS = (64, 128)
 MAX_RESOLUTION = 1024
 #: ... or one whose predicted time (8x the last: cubic) would end past this
 TIME_LIMIT = 60.0
+def default_resolutions(max_resolution: int = MAX_RESOLUTION) -> list[int]:
+    """The resolutions tried first where none is given: 64 and 128
+    (:data:`DEFAULT_RESOLUTIONS`), or, where ``max_resolution`` is below
+    128, the cap and its half, so that no grid passes a cap set alone
+    (a cap of 32: 16 and 32).
+
+    Parameters
+    ----------
+    max_resolution : int
+        The cap on the resolutions, at least 1.
+
+    Returns
+    -------
+    list of int
+
+    Examples
+    --------
+    >>> default_resolutions(), default_resolutions(32), default_resolutions(100), default_resolutions(1)
+    ([64, 128], [16, 32], [50, 100], [1])
+    """
+    if max_resolution >= max(DEFAULT_RESOLUTIONS):
+        return list(DEFAULT_RESOLUTIONS)
+    return sorted({max(1, max_resolution // 2), max_resolution})
+
+
 #: peak bytes per grid voxel of one resolution: the volume, the voxeliser's
 #: difference array (int32) and the labelling of the Betti numbers
 DIGITAL_BYTES_PER_VOXEL = 1 + 4 + LABEL_BYTES_PER_VOXEL
@@ -799,7 +824,7 @@ def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict
 # --------------------------------------------------------------------------
 
 
-def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFAULT_RESOLUTIONS,
+def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] | None = None,
                  connectivity: int | np.integer | None = None, progress: Callable[[int, int | None], object] | None = None, *,
                  step: bool = True, max_resolution: int | np.integer = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
                  on_resolution: Callable[[dict], object] | None = None, strict: bool = False,
@@ -842,8 +867,9 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
         A mesh file of any format trimesh reads, or a mesh in memory (a
         ``trimesh.Trimesh``; positions welded as a file's are:
         :func:`~isoflow.mesh.load.mesh_input`).
-    resolutions : sequence of int
-        Voxels along the longest side, tried first.
+    resolutions : sequence of int, optional
+        Voxels along the longest side, tried first. None (the default):
+        :func:`default_resolutions` within ``max_resolution``.
     connectivity : {6, 26}, optional
         The digital solid's. None (the default): the one a surface isoflow
         wrote records in its file
@@ -902,6 +928,9 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
     strict = check_strict(strict, "verify_genus")
     fill = check_fill(fill)  # before any resolution runs: the verdict compares by it as a string
     # a 0D array is iterable by its type and not by NumPy, which raised TypeError from list()
+    if resolutions is None:  # (a cap checked below; one that is not an int keeps the defaults for its refusal)
+        cap = max_resolution if isinstance(max_resolution, (int, np.integer)) else MAX_RESOLUTION
+        resolutions = default_resolutions(max(1, int(cap)))
     resolutions = scalar_given(resolutions)  # type: ignore[assignment]  # refused below as one number
     if isinstance(resolutions, (str, bytes)) or not isinstance(resolutions, Iterable):
         hint = f"; one resolution is [{given_text(resolutions)}]" if isinstance(resolutions, (int, np.integer)) else ""
