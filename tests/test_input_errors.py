@@ -1261,3 +1261,33 @@ def test_the_threshold_offered_for_negative_labels_keeps_every_labelled_voxel(tm
     op, value = test.group(1), float(test.group(2))
     kept = labels > value if op == ">" else labels != value
     assert np.count_nonzero(kept) == np.count_nonzero(labels) == 27 + 64
+
+
+@pytest.mark.parametrize("members, words", [
+    ({}, ["an archive of no file: it holds no mesh"]),
+    ({"readme.txt": "notes", "logo.png": "png"}, ["holds no mesh file (its files: logo.png, readme.txt)"]),
+    ({"torus.zip": None}, ["holds no mesh file (its files: torus.zip)",
+                           "an archive inside it (torus.zip) is not opened: unpack it and give its mesh"]),
+], ids=["empty", "no-mesh", "nested"])
+@pytest.mark.parametrize("command", ["genus", "info"])
+def test_a_valid_archive_without_a_mesh_says_what_it_holds(tmp_path, members, words, command):
+    """A zip that Python's zipfile opens (so a valid ZIP file) but holding no
+    mesh, or only another zip, was "no triangles read (empty mesh, or not a
+    valid ZIP file)": it is valid, and the line now names what it holds."""
+    inner = tmp_path / "inner.zip"
+    with zipfile.ZipFile(inner, "w") as z:
+        z.writestr("torus.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    path = tmp_path / "parts.zip"
+    with zipfile.ZipFile(path, "w") as z:
+        for name, text in members.items():
+            z.writestr(name, inner.read_bytes() if text is None else text)
+    with zipfile.ZipFile(path) as z:
+        assert z.testzip() is None  # Python's zipfile reads it whole: a valid ZIP file
+    r = subprocess.run([sys.executable, "-m", "isoflow", command, str(path)], capture_output=True, text=True)
+    assert r.returncode == 2 and r.stdout == ""
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
+    assert lines[0].startswith(f"isoflow {command}: error: {path}: ")
+    assert "not a valid ZIP file" not in lines[0]
+    for w in words:
+        assert w in lines[0], (w, lines[0])

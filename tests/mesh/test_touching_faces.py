@@ -270,3 +270,78 @@ def test_voxels_joining_solids_on_an_edge_say_so(tmp_path, option, by, said):
     [note] = [n for n in d["notes"] if n["kind"] == "corner_joins"]
     assert note["facts"] == {"bodies": bodies, "components": mesh.body_count, "by": by}
     assert said + "1 component for the solid's 2 bodies" in d["verdict"]
+
+
+@pytest.mark.parametrize("option", [["--connectivity", "26"], ["--fill", "flood"]])
+@pytest.mark.parametrize("second", [[[1, 1, 0], [2, 2, 1]], [[1, 1, 1], [2, 2, 2]]], ids=["edge", "vertex"])
+def test_voxels_joining_touching_solids_stop_stepping_once_settled(tmp_path, option, second):
+    """Two boxes on a common edge or corner, read 26-connected or flood
+    filled: the voxels join them at every resolution (trimesh's
+    vertex-connected body_count, 1), so once two grids agree on that one
+    component and the genus the stepping has nothing left to settle (it
+    doubled on to --max-resolution for a count no grid changes)."""
+    m3 = pytest.importorskip("manifold3d")
+    boxes_obj(tmp_path / "touch.obj", [[0, 0, 0], [1, 1, 1]], second)
+    mesh = trimesh.load(tmp_path / "touch.obj", force="mesh")
+    bodies = len(m3.Manifold(m3.Mesh(mesh.vertices.astype(np.float32), mesh.faces.astype(np.uint32))).decompose())
+    assert (bodies, mesh.body_count, mesh.euler_number) == (2, 1, 3)
+    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "touch.obj"), "--resolution", "16",
+                        "32", "--json", *option], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    # the two grids asked agree (one component, genus 0): no third is tried
+    assert [e["resolution"] for e in d["digital"]] == [16, 32]
+    assert [e["betti"][:2] for e in d["digital"]] == [[mesh.body_count, 0]] * 2
+    assert d["stop"] is None and "stopped by" not in d["verdict"]
+    assert (d["kind"], d["bodies"]) == ("disagree", bodies)
+    assert [n["kind"] for n in d["notes"]].count("corner_joins") == 1
+
+
+def test_bodies_closer_than_a_voxel_still_step_26_connected(tmp_path):
+    """Two boxes on a common corner and a third 0.05 off the side of one:
+    26-connected voxels join the corner pair at any grid, the gap on coarse
+    grids only (a voxel of 0.1 and more across), so the stepping goes on
+    until a grid parts it: trimesh's vertex-connected body_count, 2."""
+    boxes_obj(tmp_path / "gap.obj", [[0, 0, 0], [1, 1, 1]], [[1, 1, 1], [2, 2, 2]], [[-1, 0, 0], [-0.05, 1, 1]])
+    mesh = trimesh.load(tmp_path / "gap.obj", force="mesh")
+    assert mesh.body_count == 2
+    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "gap.obj"), "--resolution", "8",
+                        "16", "--connectivity", "26", "--json"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert d["digital"][0]["betti"][0] == 1  # the gap closed at 8 across (a voxel of 0.375)
+    assert [e["betti"][:2] for e in d["digital"][-2:]] == [[mesh.body_count, 0]] * 2
+    assert d["stop"] is None
+
+
+def test_crossing_components_facing_opposite_ways_are_no_union(tmp_path):
+    """A ball crossing an inside-out ball: by the nonzero rule the solid is
+    each ball less the other (the lens they share has winding 0), which
+    manifold3d is not asked to build; the outward ball less the inside-out
+    one stands in (``solid.approximate``). The verdict said "the solid they
+    bound is their union", and the solid row "manifold3d's union of the
+    components", of a solid whose volume is not the union's."""
+    m3 = pytest.importorskip("manifold3d")
+    a = trimesh.creation.icosphere(2)
+    b = trimesh.creation.icosphere(2)
+    b.invert()
+    b.apply_translation([1, 0, 0])
+    trimesh.util.concatenate([a, b]).export(tmp_path / "balls.ply")
+
+    def solid(m, turn=False):
+        f = m.faces[:, ::-1] if turn else m.faces
+        return m3.Manifold(m3.Mesh(m.vertices.astype(np.float32), np.ascontiguousarray(f, np.uint32)))
+
+    union = (solid(a) + solid(b, turn=True)).volume()
+    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "balls.ply"), "--resolution", "16",
+                        "32", "--no-step"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    d = json.loads(subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "balls.ply"),
+                                   "--resolution", "16", "32", "--no-step", "--json"],
+                                  capture_output=True, text=True).stdout)
+    assert d["solid"]["approximate"] is True
+    assert abs(d["solid"]["volume"] - union) > 0.1 * union  # not the union of the two
+    [row] = [line for line in r.stdout.splitlines() if line.strip().startswith("solid ")]
+    assert "union of the components" not in row and "approximate" in row
+    assert "is their union" not in d["verdict"]
+    assert "the outward components less the inside-out ones" in d["verdict"]

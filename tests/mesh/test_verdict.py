@@ -600,3 +600,31 @@ def test_cavities_of_the_grid_that_the_solid_has_not_are_not_called_nested_shell
     assert v.digital[-1]["betti"][2] == 1
     said = note_text(next(n for n in v.notes if n.kind == "cavities"))
     assert said == "the solid has 1 cavity (nested shells) at resolution 32"
+
+
+@pytest.mark.parametrize("cap, grids", [(32, [16, 32]), (100, [50, 100]), (256, [64, 128])])
+def test_max_resolution_alone_keeps_the_default_grids_within_it(tmp_path, cap, grids):
+    """`genus MESH --max-resolution 32`, no --resolution: the default grids
+    (64 and 128) were tried past the cap, and the verdict blamed "the
+    resolutions asked (128 is past --max-resolution 32 ...)", none having
+    been asked. Within the cap the two finest grids are the cap and its
+    half; a cap above 128 leaves the defaults. The torus (trimesh, genus 1
+    by its Euler number) agrees at them."""
+    import subprocess
+    import sys
+
+    import trimesh
+
+    t = trimesh.creation.torus(1.0, 0.3)
+    assert t.euler_number == 0 and t.is_watertight
+    t.export(tmp_path / "torus.ply")
+    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "torus.ply"), "--max-resolution",
+                        str(cap), "--json"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert [e["resolution"] for e in d["digital"]] == grids
+    assert max(e["resolution"] for e in d["digital"]) <= cap
+    assert (d["kind"], d["reference"], d["stop"]) == ("agree", 1, None)
+    assert "resolutions asked" not in d["verdict"]
+    v = verify_genus(tmp_path / "torus.ply", max_resolution=cap)  # the library's default alike
+    assert [e["resolution"] for e in v.digital] == grids

@@ -16,7 +16,8 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.add_argument("mesh", help="a mesh file: any format trimesh reads")
     # extend: "--resolution 32 --resolution 64" tries both, as "--resolution 32 64" does
     p.add_argument("--resolution", type=resolution_value, nargs="+", action="extend",
-                   help="voxels along the longest side, tried first (default: 64 128; repeated, all are tried); "
+                   help="voxels along the longest side, tried first (default: 64 128, or --max-resolution and "
+                        "its half where that is below 128; repeated, all are tried); "
                         "then doubled until the digital Betti numbers of the last two agree")
     p.add_argument("--max-resolution", type=resolution_value,
                    help="stop doubling beyond this (default 1024); the resolutions given are tried whatever it says")
@@ -31,9 +32,9 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
 
 
 def cmd_genus(args: argparse.Namespace) -> int:
-    from ..mesh.genus import DEFAULT_RESOLUTIONS, verify_genus
+    from ..mesh.genus import verify_genus
 
-    res = args.resolution or list(DEFAULT_RESOLUTIONS)
+    res = args.resolution  # None: the defaults within --max-resolution (default_resolutions)
     kw = {k: v for k, v in (("max_resolution", args.max_resolution), ("time_limit", args.time_limit)) if v is not None}
     with progress_bar(args, "genus") as show:
 
@@ -120,7 +121,9 @@ def format_genus(report, name: str) -> str:
                            f"(genus() of the whole mesh: {m3['genus_whole_mesh']})"),
         "  solid       " + (f"genus {solid['genus']}, {counted(solid['bodies'], 'body', 'bodies')}, "
                             f"{counted(solid['cavities'], 'cavity', 'cavities')}, {_volume(solid['volume'])} "
-                            "(manifold3d's union of the components)" + _filled_words(report)
+                            + ("(manifold3d: the outward components less the inside-out ones, approximate)"
+                               if solid.get("approximate") else "(manifold3d's union of the components)")
+                            + _filled_words(report)
                             if "genus" in solid else f"none ({solid['error']})"),
         "  pymeshlab   " + (f"genus {pm.get('genus')}" + (f" ({pm['error']})" if "error" in pm else
                                                         _open_words(pm.get("boundary_edges", 0)))),

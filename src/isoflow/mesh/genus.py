@@ -597,6 +597,33 @@ DEFAULT_RESOLUTIONS = (64, 128)
 MAX_RESOLUTION = 1024
 #: ... or one whose predicted time (8x the last: cubic) would end past this
 TIME_LIMIT = 60.0
+
+
+def default_resolutions(max_resolution: int = MAX_RESOLUTION) -> list[int]:
+    """The resolutions tried first where none is given: 64 and 128
+    (:data:`DEFAULT_RESOLUTIONS`), or, where ``max_resolution`` is below
+    128, the cap and its half, so that no grid passes a cap set alone
+    (a cap of 32: 16 and 32).
+
+    Parameters
+    ----------
+    max_resolution : int
+        The cap on the resolutions, at least 1.
+
+    Returns
+    -------
+    list of int
+
+    Examples
+    --------
+    >>> default_resolutions(), default_resolutions(32), default_resolutions(100), default_resolutions(1)
+    ([64, 128], [16, 32], [50, 100], [1])
+    """
+    if max_resolution >= max(DEFAULT_RESOLUTIONS):
+        return list(DEFAULT_RESOLUTIONS)
+    return sorted({max(1, max_resolution // 2), max_resolution})
+
+
 #: peak bytes per grid voxel of one resolution: the volume, the voxeliser's
 #: difference array (int32) and the labelling of the Betti numbers
 DIGITAL_BYTES_PER_VOXEL = 1 + 4 + LABEL_BYTES_PER_VOXEL
@@ -606,7 +633,7 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
                   step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
                   target: int | None = None, progress=None, on_resolution=None,
                   strict: bool = False, fill: Fill = "winding", bodies: int | None = None,
-                  t_junctions: bool = True) -> tuple[list, Stop | None]:
+                  t_junctions: bool = True, joined: int | None = None) -> tuple[list, Stop | None]:
     """Digital topology of the voxelised solid at ``resolutions`` and then,
     while ``step`` and the Betti numbers of the last two differ (or agree on
     a genus other than ``target``, or on components other than ``bodies``:
@@ -623,7 +650,10 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
     resolution. ``on_resolution(entry)`` is called after each. ``fill``
     is the voxels compared (:mod:`isoflow.mesh.fills`); ``t_junctions``
     False: the mesh's T-junctions are split already, or none closes
-    (:func:`~isoflow.mesh.voxelize.voxelize` looks for none).
+    (:func:`~isoflow.mesh.voxelize.voxelize` looks for none). ``joined``:
+    the components the voxels keep at every resolution where they join
+    bodies that touch (:func:`touch_joined_bodies`), settled on as
+    ``bodies`` is.
     """
     import time
 
@@ -638,7 +668,8 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
             res = todo.pop(0)
         else:
             res, stop = next_resolution(out, target, step=step, max_resolution=max_resolution,
-                                        time_limit=time_limit, elapsed=time.monotonic() - start, bodies=bodies)
+                                        time_limit=time_limit, elapsed=time.monotonic() - start, bodies=bodies,
+                                        joined=joined)
             if res is None:
                 return out, stop
         weight = res**3
@@ -663,16 +694,18 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
 
 
 def next_resolution(done: list, target: int | None, *, step: bool, max_resolution: int, time_limit: float,
-                    elapsed: float, bodies: int | None = None) -> tuple[int | None, Stop | None]:
+                    elapsed: float, bodies: int | None = None,
+                    joined: int | None = None) -> tuple[int | None, Stop | None]:
     """The resolution to try after ``done`` (twice the last), or None with
     why not: the Betti numbers settled on ``target`` and, where given,
-    ``bodies`` components (no :class:`Stop`), or
+    ``bodies`` components, or ``joined``, those no grid parts (no
+    :class:`Stop`), or
     a limit (the time that ``elapsed`` seconds leave, the memory budget).
     ``max_resolution`` caps the doubling only: where the resolutions asked
     already pass it, they are what ended the stepping (a Stop "asked")."""
     stable = len(done) >= 2 and done[-1]["betti"] == done[-2]["betti"]
     if stable and (target is None or done[-1]["genus"] == target) and (bodies is None or
-                                                                       done[-1]["betti"][0] == bodies):
+                                                                       done[-1]["betti"][0] in (bodies, joined)):
         return None, None
     if not step:
         return None, Stop("asked")
@@ -793,7 +826,7 @@ def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict
 # --------------------------------------------------------------------------
 
 
-def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFAULT_RESOLUTIONS,
+def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] | None = None,
                  connectivity: int | np.integer | None = None, progress: Callable[[int, int | None], object] | None = None, *,
                  step: bool = True, max_resolution: int | np.integer = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
                  on_resolution: Callable[[dict], object] | None = None, strict: bool = False,
@@ -836,8 +869,9 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
         A mesh file of any format trimesh reads, or a mesh in memory (a
         ``trimesh.Trimesh``; positions welded as a file's are:
         :func:`~isoflow.mesh.load.mesh_input`).
-    resolutions : sequence of int
-        Voxels along the longest side, tried first.
+    resolutions : sequence of int, optional
+        Voxels along the longest side, tried first. None (the default):
+        :func:`default_resolutions` within ``max_resolution``.
     connectivity : {6, 26}, optional
         The digital solid's. None (the default): the one a surface isoflow
         wrote records in its file
@@ -896,6 +930,9 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
     strict = check_strict(strict, "verify_genus")
     fill = check_fill(fill)  # before any resolution runs: the verdict compares by it as a string
     # a 0D array is iterable by its type and not by NumPy, which raised TypeError from list()
+    if resolutions is None:  # (a cap checked below; one that is not an int keeps the defaults for its refusal)
+        cap = max_resolution if isinstance(max_resolution, (int, np.integer)) else MAX_RESOLUTION
+        resolutions = default_resolutions(max(1, int(cap)))
     resolutions = scalar_given(resolutions)  # type: ignore[assignment]  # refused below as one number
     if isinstance(resolutions, (str, bytes)) or not isinstance(resolutions, Iterable):
         hint = f"; one resolution is [{given_text(resolutions)}]" if isinstance(resolutions, (int, np.integer)) else ""
@@ -969,7 +1006,8 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
         digital, stop = digital_steps(
             *voxelised, resolutions, connectivity, step=step and not w["crossing_self"], max_resolution=max_resolution,
             time_limit=time_limit, target=target, progress=progress, on_resolution=on_resolution,
-            strict=strict, fill=fill, bodies=bodies, t_junctions=t_junctions)
+            strict=strict, fill=fill, bodies=bodies, t_junctions=t_junctions,
+            joined=None if contacts is not None else touch_joined_bodies(w, f, connectivity, fill, bodies))
     except IsoflowError as exc:
         raise exc.at(name) from None  # a refused grid keeps its command-line words
     stable = len(digital) >= 2 and digital[-1]["betti"] == digital[-2]["betti"]
@@ -1291,7 +1329,8 @@ def shape_notes(w: dict, kind: VerdictKind, fill: Fill = "winding", contacts: di
         notes.append(Note("overlap", {
             "components": mesh["components"], "crossing": w["faces_crossing_other_components"] or 0,
             "shared": mesh["shared_vertices"], "solid_genus": w["solid_genus"], "error": w["solid"].get("error"),
-            **({"touching": w["faces_touching_own_component"]} if w["faces_touching_own_component"] else {})}))
+            **({"touching": w["faces_touching_own_component"]} if w["faces_touching_own_component"] else {}),
+            **({"approximate": True} if w["solid"].get("approximate") else {})}))
     if w["crossing_self"] and kind != "self_intersecting":
         notes.append(Note("self_intersecting", {"n": w["self_intersecting_faces"]}))
     if w["zero_area_faces"]:
@@ -1312,6 +1351,61 @@ def rounding_notes(v: np.ndarray, f: np.ndarray, w: dict, stats: dict) -> list[N
              "non-manifold edges": mesh["nonmanifold_edges"], "non-manifold vertices": mesh["nonmanifold_vertices"],
              "zero-area faces": w["zero_area_faces"]}
     return [Note("float64_rounding", {**facts, "defects": [k for k, n in found.items() if n]})]
+
+
+def touch_joined_bodies(w: dict, faces: np.ndarray, connectivity: int, fill: Fill, bodies: int | None) -> int | None:
+    """The components the voxels keep at every resolution where they join
+    solids that touch at a point or along an edge (26-connected, or a
+    flood fill's shared shell voxels: :func:`_corner_joined`), fewer than
+    the solid's ``bodies``; None where that count is not known, or not
+    fewer.
+
+    It is known where the bodies touch only at vertices they share: no
+    face crosses or touches another component, no shell nests in another
+    and the solid has no cavity, so each group of faces joined through
+    shared vertices (trimesh's ``body_count``) is one component at any
+    grid fine enough to part what does not touch.
+
+    Parameters
+    ----------
+    w : dict
+        The witnesses (:func:`witnesses`).
+    faces : numpy.ndarray
+        The mesh's faces (M, 3), as counted there.
+    connectivity : int
+        The digital rows' connectivity.
+    fill : str
+        The voxels compared.
+    bodies : int or None
+        The solid's bodies (:func:`reference_bodies`).
+
+    Returns
+    -------
+    int or None
+
+    Examples
+    --------
+    Two tetrahedra on a common corner (vertex 0), one body each:
+
+    >>> f = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3],
+    ...               [0, 4, 5], [0, 5, 6], [0, 6, 4], [4, 6, 5]])
+    >>> w = {"mesh": {"shared_vertices": 1, "nonmanifold_vertices": 0, "nonmanifold_edges": 0},
+    ...      "faces_crossing_other_components": 0, "nested": False, "solid": {"cavities": 0}}
+    >>> touch_joined_bodies(w, f, 26, "winding", 2), touch_joined_bodies(w, f, 6, "winding", 2)
+    (1, None)
+    """
+    from ..scale.graphs import components
+
+    mesh = w["mesh"]
+    touch = mesh["shared_vertices"] or mesh["nonmanifold_vertices"] or mesh["nonmanifold_edges"]
+    if bodies is None or not touch or not (connectivity == 26 or fill == "flood"):
+        return None
+    if w["faces_crossing_other_components"] or w["nested"] or w["solid"].get("cavities") != 0:
+        return None  # bodies joined otherwise than at shared vertices, or shells that are no body
+    used, index = np.unique(faces, return_inverse=True)
+    index = index.reshape(faces.shape)
+    groups = components(len(used), np.r_[index[:, 0], index[:, 1]], np.r_[index[:, 1], index[:, 2]])[0]
+    return groups if groups < bodies else None
 
 
 def _corner_joined(w: dict, last: dict, bodies: int | None, fill: Fill) -> bool:

@@ -815,8 +815,9 @@ def _read(p: Path, ext: str):
         return simple
     try:
         if kind := next((k for s, k in ARCHIVE_TYPES.items() if p.name.lower().endswith(s)), None):
-            for _ in mesh_members(p, kind):  # the merge below would leave a member of no triangle out
-                pass
+            # the merge below would leave a member of no triangle out
+            if not sum(1 for _ in mesh_members(p, kind)) and (line := meshless_archive_line(p)) is not None:
+                raise IsoflowError(line)  # a valid archive, which trimesh's empty mesh called "not a valid" one
         mesh = trimesh_load(p, "mesh")
     except IsoflowError:
         if ext == "obj":  # trimesh's IndexError on an index past the vertices, its ValueError on a word: the line
@@ -1028,6 +1029,53 @@ def faceless_member_line(where: str, kind: str, scene: Any, data: bytes = b"") -
     if points:
         return point_cloud_line(where, points)
     return f"{where}: no triangles read (empty mesh, or not a valid {kind.upper()} file)"
+
+
+def meshless_archive_line(p: Path) -> str | None:
+    """The line for an archive (:data:`ARCHIVE_TYPES`) that opens but holds
+    no mesh file: what it holds, and that an archive inside it is not
+    opened; None where it does not open (the reader's line says why).
+
+    Parameters
+    ----------
+    p : pathlib.Path
+        The archive.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> import tempfile, zipfile
+    >>> p = Path(tempfile.mkdtemp()) / "parts.zip"
+    >>> with zipfile.ZipFile(p, "w") as z:
+    ...     z.writestr("readme.txt", "notes"); z.writestr("more.zip", b"")
+    >>> print(meshless_archive_line(p))  # doctest: +ELLIPSIS
+    /.../parts.zip: holds no mesh file (its files: more.zip, readme.txt); a mesh in an archive is read by its \
+suffix (.stl, .obj, .ply, .off, .glb, ...); an archive inside it (more.zip) is not opened: unpack it and give its mesh
+    """
+    import tarfile
+    import zipfile
+
+    try:
+        if p.name.lower().endswith(".zip"):
+            with zipfile.ZipFile(p) as z:
+                names = sorted(i.filename for i in z.infolist() if not i.is_dir())
+        else:
+            with tarfile.open(p) as t:
+                names = sorted(m.name for m in t.getmembers() if m.isfile())
+    except (OSError, EOFError, zipfile.BadZipFile, tarfile.TarError):
+        return None
+    if not names:
+        return f"{p}: an archive of no file: it holds no mesh"
+    shown = ", ".join(names[:5]) + (f", ... ({len(names)} files)" if len(names) > 5 else "")
+    line = (f"{p}: holds no mesh file (its files: {shown}); a mesh in an archive is read by its suffix (.stl, .obj, "
+            ".ply, .off, .glb, ...)")
+    inner = [n for n in names if any(n.lower().endswith(s) for s in ARCHIVE_TYPES)]
+    if inner:
+        line += f"; an archive inside it ({', '.join(inner[:3])}) is not opened: unpack it and give its mesh"
+    return line
 
 
 def mesh_members(p: Path, kind: str, key: Callable[[str], Any] | None = None) -> Iterator[tuple[str, str, bytes, Any]]:

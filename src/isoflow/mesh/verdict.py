@@ -342,18 +342,23 @@ def _union_words(solid_genus: int | None, error: str | None) -> str:
 
 
 def _overlap_words(components: int, crossing: int, shared: int, solid_genus: int | None, error: str | None,
-                   touching: int = 0) -> str:
+                   touching: int = 0, approximate: bool = False) -> str:
     union = _union_words(solid_genus, error)
     # touching faces of one component (solids stacked face to face on
     # shared corners): they meet without crossing, which is no overlap
     touch = (f"{counted(touching, 'face')} {'touch faces of their' if touching > 1 else 'touches faces of its'} own "
              "component without crossing (solids face to face)") if touching else ""
-    if touching and not crossing and not shared:
+    if touching and not crossing and not shared and not approximate:
         return f"{touch}: the solid the mesh bounds is their union, {union}"
     crosses = counted(crossing, "face") + (" crosses" if crossing == 1 else " cross")
-    return (f"the mesh's {components} components overlap or touch ({crosses} other components, "
-            f"{counted(shared, 'vertex', 'vertices')} shared{'; ' + touch if touch else ''}): the solid they bound "
-            f"is their union, {union}")
+    said = (f"the mesh's {components} components overlap or touch ({crosses} other components, "
+            f"{counted(shared, 'vertex', 'vertices')} shared{'; ' + touch if touch else ''})")
+    if approximate:  # (solid.approximate): the nonzero rule's solid was not built; say what stands in for it
+        return (f"{said}, some facing opposite ways (inside-out) or too many to follow: the solid they bound by the "
+                f"nonzero rule is not built; the outward components less the inside-out ones stand in for it, {union}; "
+                "where surfaces facing opposite ways cross, the solid's parts touch along the crossing curves, which "
+                "grids read differently")
+    return f"{said}: the solid they bound is their union, {union}"
 
 
 def _nonmanifold_edge_words(n: int, solid_genus: int | None = None, error: str | None = None) -> str:
