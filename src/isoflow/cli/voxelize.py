@@ -103,6 +103,7 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     """Several meshes (or one split into bodies) into one label image."""
     from ..mesh.bodies import mesh_bodies
     from ..mesh.label_voxels import voxelize_meshes
+    from ..mesh.mesh_units import declared_unit
     from ..mesh.volumes import (
         check_volume_output,
         keeps_names,
@@ -126,9 +127,12 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     # each label's mesh named in the file where its format has a place for names; where it has none, a note
     # (the names are the command's own, not asked for: no warning, as write_labels gives of names given)
     kept = keeps_names(args.output)
+    # the unit the mesh files declare, where they declare one and the same (a mix is left without)
+    units = {declared_unit(mesh) for mesh in args.mesh}
+    unit = units.pop() if len(units) == 1 else None
     with coarser_for_magicavoxel(), writing_line(args, args.output):
         out = written(write_labels(r.labels, args.output, pitch=r.pitch, origin=r.origin, force=args.force,
-                                   names=r.names if kept else None), args.output)
+                                   names=r.names if kept else None, unit=unit), args.output)
     say_note(args, out, r.note, why=0 in r.voxels)  # (it names the labels that got no voxel)
     if not kept:
         say_note(args, out, names_not_kept(args.output, len(r.names)))
