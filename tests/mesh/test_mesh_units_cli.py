@@ -79,3 +79,21 @@ def test_a_store_and_a_label_image_keep_the_unit_too(tmp_path):
     assert done.returncode == 0, done.stderr
     with np.load(tmp_path / "labels.npz") as f:
         assert str(f["unit"]) == "in"
+
+
+def test_meshes_in_different_units_are_refused_for_one_grid(tmp_path):
+    """A 2 mm box and a 2 in box are drawn by their numbers as one size:
+    one label image of both would be wrong by 25.4 in one of them."""
+    mm = box_3mf(tmp_path / "mm.3mf", "millimeter")
+    inch = box_3mf(tmp_path / "inch.3mf", "inch")
+    assert {trimesh.load(mm).units, trimesh.load(inch).units} == {"millimeter", "inch"}
+    done = isoflow("voxelize", mm, inch, "--pitch", "0.5", "-o", tmp_path / "labels.npz")
+    assert done.returncode == 2 and not (tmp_path / "labels.npz").exists()
+    assert len(done.stderr.splitlines()) == 1 and "Traceback" not in done.stderr
+    assert "mm.3mf in mm" in done.stderr and "inch.3mf in in" in done.stderr
+    # one unit, or a mesh of bare numbers beside it, is voxelised as before
+    stl = tmp_path / "box.stl"
+    trimesh.creation.box((2, 3, 4)).export(stl)
+    for meshes in ((mm, mm), (mm, stl)):
+        done = isoflow("voxelize", *meshes, "--pitch", "0.5", "-o", tmp_path / "ok.npz", "--force")
+        assert done.returncode == 0, done.stderr

@@ -114,6 +114,15 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     )
 
     check_volume_output(args.output, args.force, ndim=3)  # suffix, library and path before the meshes are read
+    # one grid places every mesh by its numbers: numbers in different units would be drawn at the wrong size
+    declared = {mesh: declared_unit(mesh) for mesh in args.mesh}
+    units = set(declared.values()) - {None}
+    if len(units) > 1:
+        said = ", ".join(f"{mesh} in {unit}" for mesh, unit in declared.items() if unit is not None)
+        raise IsoflowError(f"the meshes declare different length units ({said}), and one grid places them by their "
+                           "numbers; scale them to one unit first")
+    # the unit where every mesh declares it (a mesh of bare numbers, STL, OBJ, PLY, leaves the image without)
+    unit = units.pop() if units and None not in declared.values() else None
     bodies = mesh_bodies(args.mesh, args.split)
     # and the labels the format keeps, before the voxels
     refuse_label_count(args.output, len(bodies))
@@ -127,9 +136,6 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     # each label's mesh named in the file where its format has a place for names; where it has none, a note
     # (the names are the command's own, not asked for: no warning, as write_labels gives of names given)
     kept = keeps_names(args.output)
-    # the unit the mesh files declare, where they declare one and the same (a mix is left without)
-    units = {declared_unit(mesh) for mesh in args.mesh}
-    unit = units.pop() if len(units) == 1 else None
     with coarser_for_magicavoxel(), writing_line(args, args.output):
         out = written(write_labels(r.labels, args.output, pitch=r.pitch, origin=r.origin, force=args.force,
                                    names=r.names if kept else None, unit=unit), args.output)
