@@ -97,3 +97,14 @@ def test_meshes_in_different_units_are_refused_for_one_grid(tmp_path):
     for meshes in ((mm, mm), (mm, stl)):
         done = isoflow("voxelize", *meshes, "--pitch", "0.5", "-o", tmp_path / "ok.npz", "--force")
         assert done.returncode == 0, done.stderr
+
+
+def test_voxelize_meshes_in_python_refuses_them_too(tmp_path):
+    import isoflow as iso
+
+    mm = box_3mf(tmp_path / "mm.3mf", "millimeter")
+    trimesh.creation.box((2, 3, 4)).export(tmp_path / "box.glb")  # metres, by the glTF specification
+    assert trimesh.load(tmp_path / "box.glb").units == "meters"
+    with pytest.raises(iso.IsoflowError, match=r"mm\.3mf in mm, .*box\.glb in m\b"):
+        iso.voxelize_meshes([mm, tmp_path / "box.glb"], pitch=0.5)
+    assert iso.voxelize_meshes([mm, trimesh.creation.box((2, 3, 4))], pitch=0.5).voxels == (0, 192)

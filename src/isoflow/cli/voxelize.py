@@ -103,7 +103,7 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     """Several meshes (or one split into bodies) into one label image."""
     from ..mesh.bodies import mesh_bodies
     from ..mesh.label_voxels import voxelize_meshes
-    from ..mesh.mesh_units import declared_unit
+    from ..mesh.mesh_units import meshes_unit
     from ..mesh.volumes import (
         check_volume_output,
         keeps_names,
@@ -114,15 +114,8 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     )
 
     check_volume_output(args.output, args.force, ndim=3)  # suffix, library and path before the meshes are read
-    # one grid places every mesh by its numbers: numbers in different units would be drawn at the wrong size
-    declared = {mesh: declared_unit(mesh) for mesh in args.mesh}
-    units = set(declared.values()) - {None}
-    if len(units) > 1:
-        said = ", ".join(f"{mesh} in {unit}" for mesh, unit in declared.items() if unit is not None)
-        raise IsoflowError(f"the meshes declare different length units ({said}), and one grid places them by their "
-                           "numbers; scale them to one unit first")
-    # the unit where every mesh declares it (a mesh of bare numbers, STL, OBJ, PLY, leaves the image without)
-    unit = units.pop() if units and None not in declared.values() else None
+    # the unit where every mesh declares it; meshes declaring different units are refused before they are read
+    unit = meshes_unit(args.mesh)
     bodies = mesh_bodies(args.mesh, args.split)
     # and the labels the format keeps, before the voxels
     refuse_label_count(args.output, len(bodies))

@@ -18,6 +18,7 @@ import zipfile
 from pathlib import Path
 
 from ..digital.units import LENGTH_UNITS, length_unit
+from ..errors import IsoflowError
 
 # the glTF 2.0 specification, "Coordinate System and Units": "The units
 # for all linear distances are meters."
@@ -91,3 +92,37 @@ def model_part(package: zipfile.ZipFile) -> str | None:
                         return target
     models = [n for n in names if n.lower().endswith(".model")]
     return models[0] if len(models) == 1 else None
+
+
+def meshes_unit(meshes) -> str | None:
+    """The length unit of several meshes laid on one grid: the unit every
+    mesh file declares where all declare the same, None where any holds
+    bare numbers (an array, an STL); meshes whose files declare different
+    units are refused, as one grid places them all by their numbers.
+
+    Parameters
+    ----------
+    meshes : sequence
+        Mesh files, arrays or trimesh objects (only files declare a unit).
+
+    Returns
+    -------
+    str or None
+
+    Raises
+    ------
+    IsoflowError
+        Two files declare different units, each named with its unit.
+
+    Examples
+    --------
+    >>> meshes_unit(["car.glb", "wheel.glb"]), meshes_unit(["car.glb", "part.stl"])
+    ('m', None)
+    """
+    declared = [(os.fspath(m), declared_unit(m)) if isinstance(m, (str, os.PathLike)) else ("", None) for m in meshes]
+    units = {unit for _, unit in declared} - {None}
+    if len(units) > 1:
+        said = ", ".join(f"{mesh} in {unit}" for mesh, unit in declared if unit is not None)
+        raise IsoflowError(f"the meshes declare different length units ({said}), and one grid places them by their "
+                           "numbers; scale them to one unit first")
+    return units.pop() if units and all(unit is not None for _, unit in declared) else None
