@@ -108,3 +108,12 @@ def test_voxelize_meshes_in_python_refuses_them_too(tmp_path):
     with pytest.raises(iso.IsoflowError, match=r"mm\.3mf in mm, .*box\.glb in m\b"):
         iso.voxelize_meshes([mm, tmp_path / "box.glb"], pitch=0.5)
     assert iso.voxelize_meshes([mm, trimesh.creation.box((2, 3, 4))], pitch=0.5).voxels == (0, 192)
+
+
+def test_info_of_a_3mf_says_its_pitch_and_origin_in_its_unit(tmp_path):
+    mesh = box_3mf(tmp_path / "box.3mf", "inch")
+    done = isoflow("info", mesh, "--pitch", "0.5")
+    assert done.returncode == 0, done.stderr
+    grid = next(line for line in done.stdout.splitlines() if line.lstrip().startswith("voxelised"))
+    assert "pitch 0.5 in," in grid and grid.endswith("] in")
+    assert "volume                 24 in^3" in done.stdout  # 2 x 3 x 4 inches
