@@ -577,7 +577,8 @@ def test_off_polygons_of_any_size_read_as_the_same_obj(tmp_path, sides):
     ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n", ("vertex 7", "3 vertices")),
     ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n", ("face 0",)),
     ("OFF BINARY\n", ("binary OFF",)),
-    ("4OFF\n1 0 0\n0 0 0 0\n", ("3D OFF",)),
+    ("4OFF\n1 0 0\n0 0 0 0\n", ("vertex 0", "w = 0", "infinity")),
+    ("nOFF\n4\n1 0 0\n0 0 0 0\n", ("dimension 4", "3D OFF")),
     ("OFF\n3 1 0\n0 0 zero\n1 0 0\n0 1 0\n3 0 1 2\n", ("vertex 0",)),
 ])
 def test_off_files_that_are_not_what_they_say(tmp_path, capsys, text, words):
@@ -585,6 +586,36 @@ def test_off_files_that_are_not_what_they_say(tmp_path, capsys, text, words):
     assert main(["info", str(tmp_path / "m.off"), "--resolution", "8"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "m.off" in err[0] and all(w in err[0] for w in words), err
+
+
+CUBE_CORNERS = [(0, 0, 0), (2, 0, 0), (2, 2, 0), (0, 2, 0), (0, 0, 2), (2, 0, 2), (2, 2, 2), (0, 2, 2)]
+CUBE_QUADS = ["4 0 3 2 1", "4 4 5 6 7", "4 0 1 5 4", "4 1 2 6 5", "4 2 3 7 6", "4 3 0 4 7"]
+
+
+@pytest.mark.parametrize("header, corner", [
+    ("4OFF\n", lambda x, y, z: f"{2 * x} {2 * y} {2 * z} 2"),    # homogeneous: the point (x/w, y/w, z/w)
+    ("C4OFF\n", lambda x, y, z: f"{-x} {-y} {-z} -1 255 0 0"),  # w < 0 too, and a colour after it
+    ("nOFF\n3\n", lambda x, y, z: f"{x} {y} {z}"),              # Geomview's space dimension, 3
+    ("4nOFF 3\n", lambda x, y, z: f"{x} {y} {z} 1"),
+])
+def test_homogeneous_and_dimensioned_off_are_read_as_the_3d_points_they_give(tmp_path, header, corner):
+    """Geomview's 4OFF gives x y z w for the point (x/w, y/w, z/w), nOFF
+    its space dimension first: a 2-unit cube either way, 4^3 voxels of
+    0.5, as trimesh counts the cube written as plain OFF (volume 8)."""
+    import subprocess
+    import sys
+
+    plain = "OFF\n8 6 0\n" + "\n".join(" ".join(map(str, c)) for c in CUBE_CORNERS) + "\n" + "\n".join(CUBE_QUADS) + "\n"
+    (tmp_path / "plain.off").write_text(plain)
+    assert trimesh.load(tmp_path / "plain.off").volume == pytest.approx(8.0)
+    text = header + "8 6 0\n" + "\n".join(corner(*c) for c in CUBE_CORNERS) + "\n" + "\n".join(CUBE_QUADS) + "\n"
+    (tmp_path / "m.off").write_text(text)
+    done = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(tmp_path / "m.off"), "--pitch", "0.5",
+                           "-o", str(tmp_path / "m.npz")], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    with np.load(tmp_path / "m.npz") as f:
+        assert f["volume"].shape == (4, 4, 4) and int(f["volume"].sum()) == 8 / 0.5**3
+        assert np.allclose(f["origin"], 0)
 
 
 def test_stl_with_an_infinite_coordinate_is_one_line(tmp_path):

@@ -245,9 +245,10 @@ def format_info(r: Report, name: str, grid: dict | None = None, placed: dict | N
         f"{counted(r['voxels'], 'pixel' if r['dimension'] == 2 else 'voxel')}, {r['connectivity']}-connectivity",
     ]
     if grid:
-        # (as voxelize prints them)
-        lines.append(f"  voxelised              --fill {grid['fill']}, pitch {grid['pitch']:.6g}, "
-                     f"origin {coordinates(grid['origin'], step=grid['pitch'])}")
+        # (as voxelize prints them), in the unit the mesh file declares where it declares one
+        said = f" {r.unit}" if r.unit else ""
+        lines.append(f"  voxelised              --fill {grid['fill']}, pitch {grid['pitch']:.6g}{said}, "
+                     f"origin {coordinates(grid['origin'], step=grid['pitch'])}{said}")
     if placed:
         unit = f" {placed['unit']}" if placed["unit"] else ""
         size = f"{'pixel' if r['dimension'] == 2 else 'voxel'} size"

@@ -69,6 +69,7 @@ from .load import (
     trimesh_load,
     weld,
 )
+from .mesh_units import meshes_unit
 
 #: suffixes whose files are scenes of named nodes (split per node)
 SCENE_SUFFIXES = (".glb", ".gltf", ".3mf", ".dae", ".zae", ".3dxml", ".xaml", ".zip", ".tar.gz", ".tar.bz2", ".bz2")
@@ -103,6 +104,7 @@ def mesh_bodies(meshes, split: bool = False) -> list[Body]:
     if is_bare_pair(meshes):  # read as two meshes its vertices and its faces would be refused as neither
         raise IsoflowError("voxelize: meshes is one (vertices, faces) pair, not a list of meshes: "
                            "pass [(vertices, faces)]")
+    meshes_unit(meshes)  # one grid places them by their numbers: files declaring different units are refused
     bodies: list[Body] = []
     for n, mesh in enumerate(meshes, 1):
         if isinstance(mesh, Body):  # read already

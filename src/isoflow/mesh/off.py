@@ -6,9 +6,11 @@ multiplies strings), and it reads a file that lists fewer faces or vertices
 than its header says without a word. This reader takes the ASCII variants
 people write (``OFF``, ``COFF``, ``NOFF``, ``CNOFF``, ``STOFF``..., the
 counts on the header line or the next, ``#`` comments, colours or normals
-after the coordinates and after a face's corners) and refuses the rest in
-one line: binary OFF, 4D or n-D OFF, counts that do not match the lines, a
-corner that is not a vertex.
+after the coordinates and after a face's corners), and Geomview's ``4OFF``
+(homogeneous coordinates ``x y z w``, the point ``(x/w, y/w, z/w)``) and
+``nOFF`` of space dimension 3, and refuses the rest in one line: binary
+OFF, points of another dimension or at infinity (``w = 0``), counts that
+do not match the lines, a corner that is not a vertex.
 
 Polygons are cut as :func:`isoflow.mesh.readers.triangulate` cuts them:
 into fans from their first corner, as trimesh does, except a concave
@@ -46,11 +48,17 @@ def read_off(path: Path) -> tuple[np.ndarray, np.ndarray]:
     m = _HEADER.match(head[0])
     if m is None:
         raise IsoflowError(f"{path}: not an OFF file (its first word is not OFF, COFF, NOFF or the like)")
-    if m.group(2) or m.group(3):
-        raise IsoflowError(f"{path}: {head[0]} holds points of other than three coordinates; isoflow reads 3D OFF")
     if "BINARY" in (w.upper() for w in head[1:]):
         raise IsoflowError(f"{path}: binary OFF is not read; save it as ASCII OFF, PLY or OBJ")
-    counts, body = (head[1:], lines[1:]) if len(head) > 1 else (lines[1] if len(lines) > 1 else [], lines[2:])
+    rest, body = head[1:], lines[1:]
+    if m.group(3):  # nOFF: the space dimension comes first, on the header line or the next
+        if not rest:
+            rest, body = (body[0], body[1:]) if body else ([], [])
+        if not rest or rest[0] != "3":
+            said = f"of dimension {rest[0]}" if rest else "of no dimension given"
+            raise IsoflowError(f"{path}: {head[0]} holds points {said}; isoflow reads 3D OFF (nOFF with 3)")
+        rest = rest[1:]
+    counts, body = (rest, body) if rest else (body[0] if body else [], body[1:])
     try:
         nv, nf = int(counts[0]), int(counts[1])
     except (IndexError, ValueError):
@@ -58,11 +66,14 @@ def read_off(path: Path) -> tuple[np.ndarray, np.ndarray]:
     if nv < 0 or nf < 0 or nv + nf > len(body):
         raise IsoflowError(f"{path}: the OFF header says {nv} vertices and {nf} faces, "
                            f"the file holds {len(body)} lines after it")
+    width = 4 if m.group(2) else 3  # 4OFF: homogeneous x y z w
     try:
-        vertices = np.array([ln[:3] for ln in body[:nv]], dtype=np.float64).reshape(nv, 3)
+        vertices = np.array([ln[:width] for ln in body[:nv]], dtype=np.float64).reshape(nv, width)
     except ValueError:
-        bad = next(i for i, ln in enumerate(body[:nv]) if len(ln) < 3 or not _numbers(ln[:3]))
-        raise IsoflowError(f"{path}: OFF vertex {bad} is {' '.join(body[bad])!r}, not three numbers") from None
+        bad = next(i for i, ln in enumerate(body[:nv]) if len(ln) < width or not _numbers(ln[:width]))
+        raise IsoflowError(f"{path}: OFF vertex {bad} is {' '.join(body[bad])!r}, not {width} numbers") from None
+    if width == 4:
+        vertices = homogeneous_points(vertices, path)
     polygons = []
     for i, ln in enumerate(body[nv:nv + nf]):
         try:
@@ -83,6 +94,23 @@ def read_off(path: Path) -> tuple[np.ndarray, np.ndarray]:
     sizes = np.array([len(c) for c in polygons], dtype=np.int64)
     flat = np.fromiter((c for corners in polygons for c in corners), dtype=np.int64, count=int(sizes.sum()))
     return vertices, triangulate(flat, sizes, vertices)
+
+
+def homogeneous_points(xyzw: np.ndarray, path: Path) -> np.ndarray:
+    """The 3D points ``(x/w, y/w, z/w)`` of 4OFF's homogeneous coordinates;
+    a point at infinity (``w = 0``) is no corner of a surface in space.
+
+    Examples
+    --------
+    >>> homogeneous_points(np.array([[2.0, 4.0, 6.0, 2.0]]), Path("m.off"))
+    array([[1., 2., 3.]])
+    """
+    w = xyzw[:, 3]
+    if not np.all(np.isfinite(w) & (w != 0)):
+        bad = int(np.flatnonzero(~(np.isfinite(w) & (w != 0)))[0])
+        raise IsoflowError(f"{path}: 4OFF vertex {bad} has w = {w[bad]:g}: a point at infinity, not one of the "
+                           "surface's corners (4OFF gives x y z w, the point x/w, y/w, z/w)")
+    return xyzw[:, :3] / w[:, None]
 
 
 def _numbers(fields) -> bool:

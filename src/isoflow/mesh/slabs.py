@@ -41,6 +41,7 @@ from .fills import Fill, Voxelization, look_up
 from .formats.omezarr import multiscales
 from .grid import GridTooLarge, finest_fit, fmt_count, grid_words
 from .load import load_mesh, mesh_arrays
+from .mesh_units import declared_unit
 from .outputs import atomic_path, check_writable_dir
 from .store_plan import WORKERS, check_chunks, in_store, slab_chunks, slab_layout, store_need
 
@@ -276,7 +277,9 @@ def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: floa
     with atomic_path(path, directory=True) as tmp:
         root = zarr.open_group(str(tmp), mode="w", zarr_format=2)
         root.create_array("0", shape=shape, chunks=chunks, dtype=np.uint8, fill_value=0)
-        root.attrs.update({"multiscales": multiscales(path.name, [float(pitch)] * 3, origin, stored="xyz"),
+        # the axes in the unit the mesh file declares, as voxelize_file's object has it
+        unit = declared_unit(source) if isinstance(source, (str, os.PathLike)) else None
+        root.attrs.update({"multiscales": multiscales(path.name, [float(pitch)] * 3, origin, stored="xyz", unit=unit),
                            "source": where,
                            "rule": RULES[fill]})
         plan_d = delayed(plan, pure=True)

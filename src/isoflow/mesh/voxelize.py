@@ -37,6 +37,7 @@ shell nested inside another with the opposite orientation is a cavity.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from collections.abc import Callable
 from typing import Any, Literal, Protocol, overload, runtime_checkable
@@ -87,6 +88,7 @@ from .load import (  # noqa: F401
     mesh_defects,
     repeated_faces,
 )
+from .mesh_units import declared_unit
 from .t_junctions import close_t_junctions
 
 #: a progress callback: ``progress(done, total)``
@@ -1052,6 +1054,9 @@ def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolu
     Returns
     -------
     DigitalObject or (DigitalObject, Voxelization)
+        The object's ``unit`` is the length unit the file declares
+        (:func:`~isoflow.mesh.mesh_units.declared_unit`: a 3MF model's, a
+        glTF's metres), None where its format holds none.
 
     Raises
     ------
@@ -1080,6 +1085,9 @@ def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolu
                                     write_bytes=write_bytes, progress=progress, details=True)
     except IsoflowError as exc:
         raise exc.at(path) from None  # a refused grid keeps its kind and its command-line words
+    unit = declared_unit(path)
+    if unit is not None:  # the pitch and origin are in the file's unit, as a volume file's are
+        obj = dataclasses.replace(obj, unit=unit)
     if details:
         return obj, result
     say_note(result.note)

@@ -1,0 +1,128 @@
+"""The length unit a mesh file declares, for the volume voxelised from it.
+
+Most mesh formats (STL, OBJ, PLY, OFF) hold bare numbers. Two say what
+they are in: a 3MF model's ``unit`` attribute (``micron``, ``millimeter``,
+``centimeter``, ``inch``, ``foot``, ``meter``; millimetres where it is left
+out, by the 3MF core specification), and glTF, whose distances are metres
+by its specification (trimesh's ``Scene.units`` says the same of both).
+A pitch given for such a mesh is in that unit, and so are the volume's
+voxel size and origin: a volume written without it reads back as a
+number of no unit, which a NIfTI reader then takes for millimetres.
+"""
+
+from __future__ import annotations
+
+import os
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+
+from ..digital.units import LENGTH_UNITS, length_unit
+from ..errors import IsoflowError
+
+# the glTF 2.0 specification, "Coordinate System and Units": "The units
+# for all linear distances are meters."
+GLTF_UNIT = "m"
+# the 3MF core specification: the model's unit attribute, "millimeter" by default
+THREEMF_DEFAULT = "millimeter"
+
+
+def declared_unit(path: str | os.PathLike) -> str | None:
+    """The length unit a mesh file declares for its coordinates, or None.
+
+    Parameters
+    ----------
+    path : str or Path
+        A mesh file (any format trimesh reads).
+
+    Returns
+    -------
+    str or None
+        In isoflow's spelling (:func:`~isoflow.digital.units.length_unit`):
+        ``"m"`` for a glTF or GLB file, a 3MF model's ``unit`` (``"mm"``
+        where it gives none); None for a format that holds no unit (STL,
+        OBJ, PLY, OFF, ...) and for a 3MF file whose model cannot be read
+        here (the mesh reader then says why).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile, trimesh
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = trimesh.creation.box().export(folder / "box.3mf")
+    >>> declared_unit(folder / "box.3mf"), declared_unit(folder / "box.stl")
+    ('mm', None)
+    """
+    suffix = Path(path).suffix.lower()
+    if suffix in (".glb", ".gltf"):
+        return GLTF_UNIT
+    if suffix == ".3mf":
+        return threemf_unit(Path(path))
+    return None
+
+
+def threemf_unit(path: Path) -> str | None:
+    """A 3MF package's model unit, read from the root element of its model
+    part alone (the mesh itself is trimesh's to read)."""
+    try:
+        with zipfile.ZipFile(path) as package:
+            part = model_part(package)
+            if part is None:
+                return None
+            with package.open(part) as stream:
+                for _, element in ET.iterparse(stream, events=("start",)):
+                    unit = length_unit(element.get("unit", THREEMF_DEFAULT))
+                    # a DigitalObject holds one of isoflow's length units or none
+                    return unit if unit in LENGTH_UNITS else None
+    except (OSError, zipfile.BadZipFile, ET.ParseError, KeyError):
+        return None
+    return None
+
+
+def model_part(package: zipfile.ZipFile) -> str | None:
+    """The 3MF model part: the one the package's relationships name as the
+    3D model, else the only ``.model`` member (as a writer that leaves out
+    the relationship still names its part)."""
+    names = package.namelist()
+    if "_rels/.rels" in names:
+        with package.open("_rels/.rels") as stream:
+            for _, element in ET.iterparse(stream, events=("start",)):
+                if element.tag.endswith("Relationship") and element.get("Type", "").endswith("/3dmodel"):
+                    target = element.get("Target", "").lstrip("/")
+                    if target in names:
+                        return target
+    models = [n for n in names if n.lower().endswith(".model")]
+    return models[0] if len(models) == 1 else None
+
+
+def meshes_unit(meshes) -> str | None:
+    """The length unit of several meshes laid on one grid: the unit every
+    mesh file declares where all declare the same, None where any holds
+    bare numbers (an array, an STL); meshes whose files declare different
+    units are refused, as one grid places them all by their numbers.
+
+    Parameters
+    ----------
+    meshes : sequence
+        Mesh files, arrays or trimesh objects (only files declare a unit).
+
+    Returns
+    -------
+    str or None
+
+    Raises
+    ------
+    IsoflowError
+        Two files declare different units, each named with its unit.
+
+    Examples
+    --------
+    >>> meshes_unit(["car.glb", "wheel.glb"]), meshes_unit(["car.glb", "part.stl"])
+    ('m', None)
+    """
+    declared = [(os.fspath(m), declared_unit(m)) if isinstance(m, (str, os.PathLike)) else ("", None) for m in meshes]
+    units = {unit for _, unit in declared} - {None}
+    if len(units) > 1:
+        said = ", ".join(f"{mesh} in {unit}" for mesh, unit in declared if unit is not None)
+        raise IsoflowError(f"the meshes declare different length units ({said}), and one grid places them by their "
+                           "numbers; scale them to one unit first")
+    return units.pop() if units and all(unit is not None for _, unit in declared) else None
