@@ -68,6 +68,28 @@ def test_flow_of_a_glb_reports_metres_and_of_an_stl_no_unit(tmp_path):
         assert json.loads(done.stdout)["unit"] == unit
 
 
+def test_isoflows_own_glb_declares_no_metres(tmp_path):
+    """isoflow's GLB of a volume in mm holds the mm numbers as they are;
+    voxelised again it was read as metres, 1000 times the size. Its
+    ``asset.generator`` is isoflow's: no unit is declared, and the volume
+    voxelised back holds the original's voxels (the same count, trimesh's
+    volume of the GLB in voxels)."""
+    import isoflow as iso
+
+    volume = np.zeros((8, 8, 8), bool)
+    volume[2:6, 2:6, 2:6] = True
+    iso.write_volume(iso.DigitalObject(volume, pitch=0.5, unit="mm"), tmp_path / "v.npz")
+    assert isoflow("surface", tmp_path / "v.npz", "-o", tmp_path / "v.glb", "-q").returncode == 0
+    assert json.loads(bytes(memoryview((tmp_path / "v.glb").read_bytes())[20:20 + int.from_bytes(
+        (tmp_path / "v.glb").read_bytes()[12:16], "little")]))["asset"]["generator"] == "isoflow"
+    done = isoflow("voxelize", tmp_path / "v.glb", "--pitch", "0.5", "-o", tmp_path / "back.npz")
+    assert done.returncode == 0, done.stderr
+    done = isoflow("info", tmp_path / "back.npz", "--json")
+    got = json.loads(done.stdout)
+    assert got["unit"] is None and got["voxels"] == volume.sum()
+    assert got["voxels"] * 0.125 == pytest.approx(trimesh.load(tmp_path / "v.glb", force="mesh").volume)
+
+
 def test_a_store_and_a_label_image_keep_the_unit_too(tmp_path):
     mesh = box_3mf(tmp_path / "box.3mf", "inch")
     assert trimesh.load(mesh).units == "inch"

@@ -39,7 +39,8 @@ def declared_unit(path: str | os.PathLike) -> str | None:
     -------
     str or None
         In isoflow's spelling (:func:`~isoflow.digital.units.length_unit`):
-        ``"m"`` for a glTF or GLB file, a 3MF model's ``unit`` (``"mm"``
+        ``"m"`` for a glTF or GLB file (but isoflow's own, which holds its
+        volume's numbers: None), a 3MF model's ``unit`` (``"mm"``
         where it gives none); None for a format that holds no unit (STL,
         OBJ, PLY, OFF, ...) and for a 3MF file whose model cannot be read
         here (the mesh reader then says why).
@@ -54,10 +55,40 @@ def declared_unit(path: str | os.PathLike) -> str | None:
     """
     suffix = Path(path).suffix.lower()
     if suffix in (".glb", ".gltf"):
-        return GLTF_UNIT
+        # isoflow's own glTF holds the volume's numbers as they are (a
+        # surface of a volume in mm holds mm), so it declares no unit
+        return None if gltf_generator(Path(path)) == "isoflow" else GLTF_UNIT
     if suffix == ".3mf":
         return threemf_unit(Path(path))
     return None
+
+
+def gltf_generator(path: Path) -> str | None:
+    """The ``asset.generator`` of a glTF file (binary or text), None where
+    it gives none or cannot be read here (the mesh reader then says why).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile, trimesh
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "box.glb"
+    >>> _ = trimesh.creation.box().export(path)
+    >>> gltf_generator(path).endswith("github.com/mikedh/trimesh")
+    True
+    """
+    import json
+    import struct
+
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(20)
+            if head[:4] == b"glTF" and len(head) == 20 and head[16:20] == b"JSON":
+                tree = json.loads(fh.read(struct.unpack("<I", head[12:16])[0]))
+            else:
+                tree = json.loads(head + fh.read())
+        generator = tree["asset"].get("generator")
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, struct.error):
+        return None
+    return generator if isinstance(generator, str) else None
 
 
 def threemf_unit(path: Path) -> str | None:
