@@ -47,6 +47,7 @@ mesh as LPS. GLB has no such convention.
 from __future__ import annotations
 
 import contextlib
+import io
 import os
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -293,9 +294,9 @@ def write_ply(
             fmt = " ".join(f"%.{_digits(columns[k])}g" if columns[k].dtype.kind == "f" else "%d" for k in names)
             if n:
                 table = np.column_stack([columns[k].astype(np.float64) for k in names])
-                np.savetxt(fh, table, fmt=fmt)
+                write_rows(fh, table, fmt + "\n")
             for size, rows in groups:
-                np.savetxt(fh, np.column_stack([np.full(len(rows), size), rows]), fmt="%d")
+                write_rows(fh, np.column_stack([np.full(len(rows), size), rows]), " ".join(["%d"] * (size + 1)) + "\n")
         else:
             vrec = np.empty(n, dtype=[(k, columns[k].dtype.newbyteorder("<")) for k in names])
             for k in names:
@@ -355,11 +356,45 @@ def write_obj(
     with atomic_write(path, "w", sync=sync) as fh:
         for c in comments:
             fh.write(f"# {c}\n")
-        if len(vertices):
-            np.savetxt(fh, vertices, fmt=f"v %.{d}g %.{d}g %.{d}g")
+        write_rows(fh, np.asarray(vertices, np.float64).reshape(-1, 3), f"v %.{d}g %.{d}g %.{d}g\n")
         for size, rows in _size_groups(faces):
-            np.savetxt(fh, rows + 1, fmt="f" + " %d" * size)
+            write_rows(fh, rows + 1, "f" + " %d" * size + "\n")
     return path
+
+
+#: rows of a text table formatted at once by :func:`write_rows`
+ROWS_AT_ONCE = 1 << 16
+
+
+def write_rows(fh, rows: np.ndarray, line: str) -> None:
+    """Write the rows of a 2D table as text, each by ``line`` (its ``%``
+    fields, one per column, and the newline at its end), byte for byte as
+    ``np.savetxt(fh, rows, fmt=line[:-1])`` writes them. :data:`ROWS_AT_ONCE`
+    rows are one ``%`` of the line repeated over their values: savetxt
+    formats and writes a row at a time, a Python call for each.
+
+    Parameters
+    ----------
+    fh : file
+        Open for writing, text or binary (written as ASCII).
+    rows : numpy.ndarray
+        (N, K), K the fields of ``line``.
+    line : str
+        The format of one row, ending in a newline.
+
+    Examples
+    --------
+    >>> import io
+    >>> out = io.StringIO()
+    >>> write_rows(out, np.array([[1, 2, 3], [4, 5, 6]]), "f %d %d %d\n")
+    >>> out.getvalue()
+    'f 1 2 3\nf 4 5 6\n'
+    """
+    text_file = isinstance(fh, io.TextIOBase)
+    for at in range(0, len(rows), ROWS_AT_ONCE):
+        part = rows[at:at + ROWS_AT_ONCE]
+        text = (line * len(part)) % tuple(part.ravel().tolist())
+        fh.write(text if text_file else text.encode("ascii"))
 
 
 def write_stl(path: str | os.PathLike, vertices: np.ndarray, triangles: np.ndarray, *, force: bool = False,
