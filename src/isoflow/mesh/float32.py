@@ -50,16 +50,50 @@ def float32_effect(xyz: np.ndarray, spacing) -> dict:
     largest = float(np.max(np.abs(xyz))) if len(xyz) else 0.0
     with np.errstate(over="ignore"):  # the spacing at float32's largest value is inf: that step is past its range
         step = float(np.spacing(np.float32(min(largest, float(np.finfo(np.float32).max)))))
-    positions = len(np.unique(xyz, axis=0)) if len(xyz) else 0
+    positions = distinct_rows(xyz)
     if not finite:
         return {"positions": positions, "merged": None, "finite": False, "moved": None, "moved_voxels": None,
                 "largest": largest, "step": step}
     change = np.abs(xyz32.astype(np.float64) - xyz)
     moved = float(change.max()) if len(xyz) else 0.0
     moved_voxels = float((change / np.asarray(spacing, np.float64)).max()) if len(xyz) else 0.0
-    merged = positions - (len(np.unique(xyz32, axis=0)) if len(xyz) else 0)
+    merged = positions - distinct_rows(xyz32)
     return {"positions": positions, "merged": int(merged), "finite": True, "moved": moved,
             "moved_voxels": moved_voxels, "largest": largest, "step": step}
+
+
+def distinct_rows(rows: np.ndarray) -> int:
+    """How many distinct rows ``rows`` (N, K) holds, rows equal where their
+    values are (``-0.0`` is ``0.0``): each row numbered by the ranks of its
+    values among its column's distinct values, one integer per row, and
+    those counted: a sort of each column and one of integers, where
+    ``np.unique(rows, axis=0)`` sorts the rows as records of bytes.
+
+    Parameters
+    ----------
+    rows : numpy.ndarray
+        (N, K) numbers.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> distinct_rows(np.array([[0.0, 1.0], [-0.0, 1.0], [0.0, 2.0], [1.0, 1.0]]))
+    3
+    """
+    rows = np.asarray(rows)
+    if not len(rows):
+        return 0
+    key, size = np.zeros(len(rows), np.int64), 1
+    for column in rows.T:
+        values = np.unique(column)  # (a rank by binary search: unique's own return_inverse sorts again)
+        if size * len(values) >= 1 << 62:  # (no integer holds the numbering: the rows as records)
+            return len(np.unique(rows + 0.0 if rows.dtype.kind == "f" else rows, axis=0))
+        key, size = key * len(values) + np.searchsorted(values, column), size * len(values)
+    key.sort()
+    return int(np.count_nonzero(key[1:] != key[:-1])) + 1
 
 
 #: float64 is said to move a grid's voxel corners when its spacing at the
