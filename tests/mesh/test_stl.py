@@ -185,15 +185,15 @@ def test_stl_writer_holds_a_batch_of_records(tmp_path):
     assert len(tris) > 100_000 and (peak - held) / len(tris) < 294 / 4
 
 
-def test_distinct_rows_counts_what_unique_of_rows_counts(rng):
+def test_distinct_count_counts_what_unique_of_rows_counts(rng):
     """float32_effect counts distinct positions by column ranks
-    (float32.distinct_rows): the count of NumPy's unique rows, on float64
+    (float32.distinct_count): the count of NumPy's unique rows, on float64
     and float32 positions with repeats and on integers, and by value where
     rows differ in the sign of a zero alone."""
-    from isoflow.mesh.float32 import distinct_rows
+    from isoflow.mesh.float32 import distinct_count
 
     lattice = rng.integers(-40, 40, (5000, 3))
     for rows in (lattice * 0.1 + 4e6, (lattice * 0.1 + 4e6).astype(np.float32), lattice, lattice[:, :2] * 1e-300):
-        assert distinct_rows(rows) == len(np.unique(rows, axis=0))
-    assert distinct_rows(np.array([[0.0, 1.0], [-0.0, 1.0]])) == 1 == len(np.unique(np.array([0.0, -0.0])))
-    assert distinct_rows(np.zeros((0, 3))) == 0
+        assert distinct_count(rows) == len(np.unique(rows, axis=0))
+    assert distinct_count(np.array([[0.0, 1.0], [-0.0, 1.0]])) == 1 == len(np.unique(np.array([0.0, -0.0])))
+    assert distinct_count(np.zeros((0, 3))) == 0

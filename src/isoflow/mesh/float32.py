@@ -50,24 +50,26 @@ def float32_effect(xyz: np.ndarray, spacing) -> dict:
     largest = float(np.max(np.abs(xyz))) if len(xyz) else 0.0
     with np.errstate(over="ignore"):  # the spacing at float32's largest value is inf: that step is past its range
         step = float(np.spacing(np.float32(min(largest, float(np.finfo(np.float32).max)))))
-    positions = distinct_rows(xyz)
+    positions = distinct_count(xyz)
     if not finite:
         return {"positions": positions, "merged": None, "finite": False, "moved": None, "moved_voxels": None,
                 "largest": largest, "step": step}
     change = np.abs(xyz32.astype(np.float64) - xyz)
     moved = float(change.max()) if len(xyz) else 0.0
     moved_voxels = float((change / np.asarray(spacing, np.float64)).max()) if len(xyz) else 0.0
-    merged = positions - distinct_rows(xyz32)
+    merged = positions - distinct_count(xyz32)
     return {"positions": positions, "merged": int(merged), "finite": True, "moved": moved,
             "moved_voxels": moved_voxels, "largest": largest, "step": step}
 
 
-def distinct_rows(rows: np.ndarray) -> int:
+def distinct_count(rows: np.ndarray) -> int:
     """How many distinct rows ``rows`` (N, K) holds, rows equal where their
     values are (``-0.0`` is ``0.0``): each row numbered by the ranks of its
     values among its column's distinct values, one integer per row, and
     those counted: a sort of each column and one of integers, where
-    ``np.unique(rows, axis=0)`` sorts the rows as records of bytes.
+    ``np.unique(rows, axis=0)`` sorts the rows as records of bytes (the
+    rows themselves, with each row's number among them, are
+    :func:`isoflow.mesh.load.distinct_rows`'s, which a weld needs).
 
     Parameters
     ----------
@@ -80,7 +82,7 @@ def distinct_rows(rows: np.ndarray) -> int:
 
     Examples
     --------
-    >>> distinct_rows(np.array([[0.0, 1.0], [-0.0, 1.0], [0.0, 2.0], [1.0, 1.0]]))
+    >>> distinct_count(np.array([[0.0, 1.0], [-0.0, 1.0], [0.0, 2.0], [1.0, 1.0]]))
     3
     """
     rows = np.asarray(rows)
