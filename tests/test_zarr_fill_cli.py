@@ -313,3 +313,28 @@ def test_a_store_of_0_and_one_value_is_its_mask_block_by_block(tmp_path, value):
         assert mesh.is_watertight and mesh.euler_number == 4 and mesh.volume == pytest.approx(want["voxels"])
     assert reports["m.zarr"] == reports["m.npy"]
     assert analyze_zarr(tmp_path / "m.zarr").betti == [1, 0, 1]
+
+
+def test_a_block_of_several_labels_is_refused_without_reading_the_store_again(tmp_path, monkeypatch):
+    """A store of 0 and one other value is that value's mask: the readers
+    block by block look for it once a block holds another value. Where
+    that block holds several labels, the store is no mask whatever the
+    other blocks hold, and is refused without a pass over it (a pass over
+    a store of terabytes before a refusal)."""
+    zarr = pytest.importorskip("zarr")
+    from isoflow.mesh.formats import omezarr
+    from isoflow.scale.arrays import NotBinary
+
+    labels = np.zeros((6, 6, 6), np.uint8)
+    labels[1, 1, 1], labels[2, 2, 2] = 5, 9
+    zarr.create_array(str(tmp_path / "l.zarr"), data=labels, chunks=(3, 3, 3))
+    store = omezarr.open_store(tmp_path / "l.zarr")
+    monkeypatch.setattr(omezarr.StoreArray, "lazy", lambda self: pytest.fail("the store was read again"))
+    assert omezarr.one_value_of_store(store, NotBinary("l.zarr: two labels", value=None)) is None
+    monkeypatch.undo()
+    looked = []
+    monkeypatch.setattr(omezarr.StoreArray, "lazy", lambda self, lazy=omezarr.StoreArray.lazy: looked.append(1) or
+                        lazy(self))
+    with pytest.raises(NotBinary) as refused:  # the first block holds 5 and 9
+        omezarr.analyze_zarr(tmp_path / "l.zarr")
+    assert refused.value.value is None and not looked

@@ -242,9 +242,9 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
         try:
             try:
                 written = write(array)
-            except NotBinary:
+            except NotBinary as refused:
                 # a store of 0 and one other value is that value's mask, as read_volume reads it
-                value = None if args.label is not None else one_value_of_store(open_store(args.input))
+                value = None if args.label is not None else one_value_of_store(open_store(args.input), refused)
                 if value is None:
                     raise
                 array = store_volume(args.input, value)[0]

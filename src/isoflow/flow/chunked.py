@@ -436,9 +436,9 @@ class ChunkedFlow(ArrayFlow):
         checked = volume.map_blocks(_binary_block, dtype=bool, where=str(source), fill=fill)
         try:
             extents = extents_of(checked)
-        except NotBinary:
+        except NotBinary as refused:
             # a store of 0 and one other value is that value's mask, as read_volume reads it
-            value = one_value_of_store(store)
+            value = one_value_of_store(store, refused)
             if value is None:
                 raise
             checked = volume == value

@@ -538,15 +538,15 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | np.integer | None 
                "progress": progress}
     try:
         return analyze_zarr_volume(path, connectivity, **options, **place)  # type: ignore[arg-type]
-    except NotBinary:
+    except NotBinary as refused:
         # a store of 0 and one other value is that value's mask, as read_volume reads it
-        value = one_value_of_store(store)
+        value = one_value_of_store(store, refused)
         if value is None:
             raise
     return analyze_value(store, value, connectivity, place, **options)
 
 
-def one_value_of_store(store: StoreArray) -> object | None:
+def one_value_of_store(store: StoreArray, refused: NotBinary | None = None) -> object | None:
     """The value ``v`` of a store whose only value other than 0 is one
     ``v`` other than 1 (a mask written 0/255), found in passes over the
     store; None where it holds another value too (a label image).
@@ -561,6 +561,11 @@ def one_value_of_store(store: StoreArray) -> object | None:
     ----------
     store : StoreArray
         The store, as :func:`open_store` opens it.
+    refused : NotBinary, optional
+        The refusal of the block read: where that block holds more than one
+        value other than 0 (its ``value`` is None) the store is no mask and
+        is not read again; where it holds one, only that value is looked
+        for.
 
     Returns
     -------
@@ -581,10 +586,17 @@ def one_value_of_store(store: StoreArray) -> object | None:
     """
     from ...scale.chunks import import_dask
 
+    if refused is not None and refused.value is None:  # (the block read holds several labels: no store read)
+        return None
     _, da = import_dask()
     lazy = store.lazy()
     if lazy.dtype.kind not in "iuf" or not lazy.size:
         return None
+    if refused is not None:
+        value = np.asarray(refused.value, lazy.dtype)[()]
+        if value == 1 or value == 0 or not np.isfinite(value):
+            return None
+        return value if bool(((lazy == 0) | (lazy == value)).all().compute()) else None
     low, high = da.compute(lazy.min(), lazy.max())
     value = high if high != 0 else low
     if value == 1 or value == 0 or not np.isfinite(value) or (low != 0 and high != 0 and low != high):
@@ -638,9 +650,9 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
         try:
             return analyze_zarr_volume(path, connectivity, progress=progress, surfaces=surfaces, threads=threads,
                                        **place)
-        except NotBinary:
+        except NotBinary as refused:
             # a store of 0 and one other value is that value's mask, as read_volume reads it
-            label = one_value_of_store(store)
+            label = one_value_of_store(store, refused)
             if label is None:
                 raise
     label = check_label(label, store.array.dtype, store.where)
