@@ -1,5 +1,6 @@
 """The command line: JSON contract, outputs, and one-line errors (exit 2)."""
 
+import itertools
 import json
 import os
 import subprocess
@@ -977,3 +978,21 @@ def test_a_file_name_with_a_control_character_is_printed_escaped_by_every_comman
     assert json.loads(capsys.readouterr().out)["input"] == str(tmp_path / f"a{odd}.npy")  # JSON: the name itself
     assert main(["info", str(tmp_path / f"gone{odd}.npy")]) == 2
     assert capsys.readouterr().err == f"isoflow info: error: {tmp_path}/gone{escaped}.npy: no such file or directory\n"
+
+
+@pytest.mark.parametrize("corner", [(10**12, 0, 0), (10**12, -10**12)])
+def test_info_of_a_far_point_list_prints_its_box_to_the_voxel(tmp_path, corner):
+    """A point list has no voxel size to print its coordinates against, and
+    the box of a unit cube at x = 1e12 came out as ``[1e+12, 0, 0] to
+    [1e+12, 1, 1]``: both sides of the box as one number, the centroid
+    half a voxel off. Its coordinates are lattice units, a voxel 1 wide:
+    the box is the points' own least and greatest corner, as written."""
+    corners = np.array(list(itertools.product((0, 1), repeat=len(corner)))) + corner
+    (tmp_path / "far.txt").write_text("".join(" ".join(map(str, p)) + "\n" for p in corners))
+    r = run("info", tmp_path / "far.txt")
+    assert r.returncode == 0, r.stderr
+    box = next(line for line in r.stdout.splitlines() if "bounding box" in line)
+    lo, hi = corners.min(axis=0), corners.max(axis=0)
+    centre = (lo + hi) / 2
+    assert f"[{', '.join(map(str, lo))}] to [{', '.join(map(str, hi))}]" in box, box
+    assert f"centroid [{', '.join(f'{c:.1f}' for c in centre)}]" in box, box
