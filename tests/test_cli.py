@@ -996,3 +996,22 @@ def test_info_of_a_far_point_list_prints_its_box_to_the_voxel(tmp_path, corner):
     centre = (lo + hi) / 2
     assert f"[{', '.join(map(str, lo))}] to [{', '.join(map(str, hi))}]" in box, box
     assert f"centroid [{', '.join(f'{c:.1f}' for c in centre)}]" in box, box
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-be"])
+def test_info_reads_a_utf16_point_list(tmp_path, encoding):
+    """Windows PowerShell's ``>`` and Notepad's "Unicode" save text as
+    UTF-16 with a byte-order mark; such a point list was refused as
+    "binary data, not a text point list", and the line listed volume
+    suffixes. It is text: read as UTF-8 text is, header and line ends as
+    written. The 27 points of a 3x3x3 grid are the corners of 8 unit
+    cubes, the box [0, 2]^3."""
+    text = "x,y,z\r\n" + "".join(f"{x},{y},{z}\r\n" for x, y, z in itertools.product(range(3), repeat=3))
+    # "utf-16-be" writes no mark of its own: one is added, as Windows' big-endian "Unicode" has
+    data = ("\ufeff" + text).encode(encoding) if encoding.endswith("be") else text.encode(encoding)
+    (tmp_path / "points.csv").write_bytes(data)
+    r = run("info", tmp_path / "points.csv", "--json")
+    assert r.returncode == 0, r.stderr
+    report = json.loads(r.stdout)
+    assert report["voxels"] == 8 and report["bbox"] == [0, 0, 0, 2, 2, 2]
+    assert report["euler_characteristic"] == 1

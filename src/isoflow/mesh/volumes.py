@@ -592,6 +592,8 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
     it) is skipped where the next line holds as many numbers; where its
     first name is empty or ``index`` (``,x,y,z``: ``to_csv`` with the
     frame's index), that first column is the index, not a coordinate.
+    UTF-8 text, or UTF-16 where a byte-order mark opens it (Windows
+    PowerShell's ``>``); a UTF-8 byte-order mark is skipped.
 
     numpy's compiled reader takes the file when it can; a file it refuses,
     or whose numbers are not all integers in range, is read again line by
@@ -642,7 +644,8 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
         # a big binary one should not be read whole before being refused
         with open(path, "rb") as fh:
             head = fh.read(1024)
-        if b"\0" in head:
+        encoding = _text_encoding(head)
+        if b"\0" in head and encoding != "utf-16":  # (UTF-16 text is half NUL bytes)
             found = sniff_volume_format(path)
             if found is not None:  # a volume without its suffix (or under another one)
                 raise IsoflowError(f"{path}: its content is {found[0]}, but volumes are read by their suffix: rename it "
@@ -656,9 +659,9 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
         check_fits(6 * path.stat().st_size, f"reading the point list {path}",
                    hint="a volume file (.npy, .zarr) holds points far more compactly")
         try:
-            header, index = _header_line(path)
-            points = _read_points_fast(path, b"," in head, header, index)
-            return points if points is not None else _read_points_by_line(path, header, index)
+            header, index = _header_line(path, encoding)
+            points = _read_points_fast(path, b"," in head, header, index, encoding)
+            return points if points is not None else _read_points_by_line(path, header, index, encoding)
         except IsoflowError as exc:
             raise IsoflowError(not_points(path, str(exc))) from None
     except (OSError, UnicodeDecodeError) as exc:
@@ -720,7 +723,17 @@ volume or mesh format)
     return said
 
 
-def _header_line(path: Path) -> tuple[int, bool]:
+def _text_encoding(head: bytes) -> str:
+    """How a point list's text is encoded, from its first bytes: UTF-16
+    where it opens with UTF-16's byte-order mark (what Windows PowerShell's
+    ``>`` and Notepad's "Unicode" write), else UTF-8, a byte-order mark
+    (Windows editors) skipped."""
+    import codecs
+
+    return "utf-16" if head.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)) else "utf-8-sig"
+
+
+def _header_line(path: Path, encoding: str = "utf-8-sig") -> tuple[int, bool]:
     """The number of the line that is a header of column names (``x,y,z``,
     as pandas' ``to_csv`` writes one), 0 where there is none: the first
     line that is neither blank nor a comment, where none of its fields is
@@ -730,7 +743,7 @@ def _header_line(path: Path) -> tuple[int, bool]:
     ``index`` after ``reset_index``), which is no coordinate: then 2 or 3
     names follow it."""
     lines = []
-    with open(path, encoding="utf-8-sig") as fh:
+    with open(path, encoding=encoding) as fh:
         for lineno, line in enumerate(fh, 1):
             line = line.split("#", 1)[0].strip()
             if line:
@@ -750,7 +763,8 @@ def _header_line(path: Path) -> tuple[int, bool]:
     return lineno, index
 
 
-def _read_points_fast(path: Path, commas: bool, header: int = 0, index: bool = False) -> np.ndarray | None:
+def _read_points_fast(path: Path, commas: bool, header: int = 0, index: bool = False,
+                      encoding: str = "utf-8-sig") -> np.ndarray | None:
     """The points by ``np.loadtxt`` (as integers, else as decimals that
     must be integers: "1e3", "2.0"), or None where the file needs the
     line-by-line reader: to be refused with its line, or for separators
@@ -765,7 +779,7 @@ def _read_points_fast(path: Path, commas: bool, header: int = 0, index: bool = F
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # "empty input file": said by the line reader
                 values = np.loadtxt(path, comments="#", delimiter="," if commas else None, ndmin=2, dtype=dtype,
-                                    encoding="utf-8-sig", skiprows=header)
+                                    encoding=encoding, skiprows=header)
             break
         except (ValueError, UnicodeDecodeError):
             continue
@@ -782,7 +796,7 @@ def _read_points_fast(path: Path, commas: bool, header: int = 0, index: bool = F
     return values.astype(np.int64, copy=False)
 
 
-def _read_points_by_line(path: Path, header: int = 0, index: bool = False) -> np.ndarray:
+def _read_points_by_line(path: Path, header: int = 0, index: bool = False, encoding: str = "utf-8-sig") -> np.ndarray:
     """The points, read line by line as a stream (8 bytes a coordinate, as
     loadtxt); the first bad line is refused with its number. The lines up
     to ``header`` (:func:`_header_line`) are skipped, and the first number
@@ -790,7 +804,7 @@ def _read_points_by_line(path: Path, header: int = 0, index: bool = False) -> np
     from array import array
 
     coords, width = array("q"), None
-    with open(path, encoding="utf-8-sig") as fh:  # a byte-order mark (Windows editors) is no coordinate
+    with open(path, encoding=encoding) as fh:  # a byte-order mark (Windows editors) is no coordinate
         for lineno, line in enumerate(fh, 1):
             if lineno <= header:
                 continue
