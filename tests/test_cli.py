@@ -1015,3 +1015,21 @@ def test_info_reads_a_utf16_point_list(tmp_path, encoding):
     report = json.loads(r.stdout)
     assert report["voxels"] == 8 and report["bbox"] == [0, 0, 0, 2, 2, 2]
     assert report["euler_characteristic"] == 1
+
+
+@pytest.mark.parametrize("index", ["", "index"])
+def test_info_reads_the_csv_pandas_writes_of_an_array_of_points(tmp_path, index):
+    """``pd.DataFrame(points).to_csv("p.csv")`` names the columns 0, 1, 2
+    and writes the index first: a header ``,0,1,2`` (``index,0,1,2`` after
+    ``reset_index``). Its numbered names kept it from being read as a
+    header, and the file was refused at line 1 ("empty coordinate"). A
+    line that opens with an index's name is no point: it is skipped, and
+    the index column with it. The 8 corners of the unit cube at (10, 10,
+    10) are one voxel, the box [10, 11]^3."""
+    corners = [(10 + x, 10 + y, 10 + z) for x, y, z in itertools.product((0, 1), repeat=3)]
+    text = f"{index},0,1,2\n" + "".join(f"{i},{x},{y},{z}\n" for i, (x, y, z) in enumerate(corners))
+    (tmp_path / "p.csv").write_text(text)
+    r = run("info", tmp_path / "p.csv", "--json")
+    assert r.returncode == 0, r.stderr
+    report = json.loads(r.stdout)
+    assert report["voxels"] == 1 and report["bbox"] == [10, 10, 10, 11, 11, 11]

@@ -591,7 +591,8 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
     first line of column names (``x,y,z``, as pandas' ``to_csv`` writes
     it) is skipped where the next line holds as many numbers; where its
     first name is empty or ``index`` (``,x,y,z``: ``to_csv`` with the
-    frame's index), that first column is the index, not a coordinate.
+    frame's index; ``,0,1,2`` for a frame of an array), that first column
+    is the index, not a coordinate.
     UTF-8 text, or UTF-16 where a byte-order mark opens it (Windows
     PowerShell's ``>``); a UTF-8 byte-order mark is skipped.
 
@@ -741,7 +742,9 @@ def _header_line(path: Path, encoding: str = "utf-8-sig") -> tuple[int, bool]:
     still refused naming its first line); and whether its first column is
     an index (``to_csv`` writes the frame's index first, named ``""``, or
     ``index`` after ``reset_index``), which is no coordinate: then 2 or 3
-    names follow it."""
+    names follow it. Those names may be ``0, 1, 2``: the column names
+    pandas gives a frame made from an array (``pd.DataFrame(points)``);
+    after an index's name that line cannot be a point."""
     lines = []
     with open(path, encoding=encoding) as fh:
         for lineno, line in enumerate(fh, 1):
@@ -757,8 +760,11 @@ def _header_line(path: Path, encoding: str = "utf-8-sig") -> tuple[int, bool]:
     names = [f.strip() for f in first.split(",")] if "," in first else first.split()
     numbers = _SPLIT.split(second)
     index = "," in first and len(names) in (3, 4) and names[0].lower() in ("", "index")
+    # ",0,1,2": an array's frame, its index written first (without the index, "0,1,2" is a point)
+    numbered = index and names[1:] == [str(i) for i in range(len(names) - 1)]
     if (len(names) != len(numbers) or len(names) - index not in (2, 3)
-            or any(_NUMBER.fullmatch(f) for f in names) or not all(_NUMBER.fullmatch(f) for f in numbers)):
+            or (any(_NUMBER.fullmatch(f) for f in names) and not numbered)
+            or not all(_NUMBER.fullmatch(f) for f in numbers)):
         return 0, False
     return lineno, index
 
