@@ -1033,3 +1033,20 @@ def test_info_reads_the_csv_pandas_writes_of_an_array_of_points(tmp_path, index)
     assert r.returncode == 0, r.stderr
     report = json.loads(r.stdout)
     assert report["voxels"] == 1 and report["bbox"] == [10, 10, 10, 11, 11, 11]
+
+
+def test_a_2d_label_image_names_the_pixel_that_holds_no_label(tmp_path):
+    """A 2D image is pixels everywhere else in isoflow's lines ("1 pixel
+    holds values other than 0 and 1"), but a value that is no label was
+    named at "voxel (3, 4)". The pixel placed is named, as a pixel, by
+    ``info --labels`` and by ``write_labels``."""
+    image = np.zeros((6, 7))
+    image[3, 4] = 0.5
+    np.save(tmp_path / "f.npy", image)
+    r = run("info", tmp_path / "f.npy", "--labels")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert "pixel (3, 4) holds 0.5" in r.stderr and "voxel" not in r.stderr, r.stderr
+    code = "import isoflow, numpy as np; isoflow.write_labels(np.array([[0, 0], [0, -3]]), 'w.npz')"
+    w = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert w.returncode != 0 and "holds -3 at pixel (1, 1)" in w.stderr, w.stderr
+    assert not (tmp_path / "w.npz").exists()

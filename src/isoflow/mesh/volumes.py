@@ -1416,7 +1416,7 @@ def _unsigned_labels(arr: np.ndarray, path: str | os.PathLike) -> np.ndarray:
         if labels.size and labels.min() < 0:
             at = np.unravel_index(int(np.argmin(labels)), labels.shape)
             raise IsoflowError(f"{path}: a label image holds labels from 0 on, this one holds {arr[at].item()!r} at "
-                               f"voxel ({', '.join(str(int(i)) for i in at)})")
+                               f"{'pixel' if arr.ndim == 2 else 'voxel'} ({', '.join(str(int(i)) for i in at)})")
         labels = labels.view(labels.dtype.str.replace("i", "u"))
     if arr.dtype.kind == "f":
         # a float image has no integer type of its own, and label_table's int64 would make every file
