@@ -1,5 +1,6 @@
 """The command line: JSON contract, outputs, and one-line errors (exit 2)."""
 
+import itertools
 import json
 import os
 import subprocess
@@ -977,3 +978,75 @@ def test_a_file_name_with_a_control_character_is_printed_escaped_by_every_comman
     assert json.loads(capsys.readouterr().out)["input"] == str(tmp_path / f"a{odd}.npy")  # JSON: the name itself
     assert main(["info", str(tmp_path / f"gone{odd}.npy")]) == 2
     assert capsys.readouterr().err == f"isoflow info: error: {tmp_path}/gone{escaped}.npy: no such file or directory\n"
+
+
+@pytest.mark.parametrize("corner", [(10**12, 0, 0), (10**12, -10**12)])
+def test_info_of_a_far_point_list_prints_its_box_to_the_voxel(tmp_path, corner):
+    """A point list has no voxel size to print its coordinates against, and
+    the box of a unit cube at x = 1e12 came out as ``[1e+12, 0, 0] to
+    [1e+12, 1, 1]``: both sides of the box as one number, the centroid
+    half a voxel off. Its coordinates are lattice units, a voxel 1 wide:
+    the box is the points' own least and greatest corner, as written."""
+    corners = np.array(list(itertools.product((0, 1), repeat=len(corner)))) + corner
+    (tmp_path / "far.txt").write_text("".join(" ".join(map(str, p)) + "\n" for p in corners))
+    r = run("info", tmp_path / "far.txt")
+    assert r.returncode == 0, r.stderr
+    box = next(line for line in r.stdout.splitlines() if "bounding box" in line)
+    lo, hi = corners.min(axis=0), corners.max(axis=0)
+    centre = (lo + hi) / 2
+    assert f"[{', '.join(map(str, lo))}] to [{', '.join(map(str, hi))}]" in box, box
+    assert f"centroid [{', '.join(f'{c:.1f}' for c in centre)}]" in box, box
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-be"])
+def test_info_reads_a_utf16_point_list(tmp_path, encoding):
+    """Windows PowerShell's ``>`` and Notepad's "Unicode" save text as
+    UTF-16 with a byte-order mark; such a point list was refused as
+    "binary data, not a text point list", and the line listed volume
+    suffixes. It is text: read as UTF-8 text is, header and line ends as
+    written. The 27 points of a 3x3x3 grid are the corners of 8 unit
+    cubes, the box [0, 2]^3."""
+    text = "x,y,z\r\n" + "".join(f"{x},{y},{z}\r\n" for x, y, z in itertools.product(range(3), repeat=3))
+    # "utf-16-be" writes no mark of its own: one is added, as Windows' big-endian "Unicode" has
+    data = ("\ufeff" + text).encode(encoding) if encoding.endswith("be") else text.encode(encoding)
+    (tmp_path / "points.csv").write_bytes(data)
+    r = run("info", tmp_path / "points.csv", "--json")
+    assert r.returncode == 0, r.stderr
+    report = json.loads(r.stdout)
+    assert report["voxels"] == 8 and report["bbox"] == [0, 0, 0, 2, 2, 2]
+    assert report["euler_characteristic"] == 1
+
+
+@pytest.mark.parametrize("index", ["", "index"])
+def test_info_reads_the_csv_pandas_writes_of_an_array_of_points(tmp_path, index):
+    """``pd.DataFrame(points).to_csv("p.csv")`` names the columns 0, 1, 2
+    and writes the index first: a header ``,0,1,2`` (``index,0,1,2`` after
+    ``reset_index``). Its numbered names kept it from being read as a
+    header, and the file was refused at line 1 ("empty coordinate"). A
+    line that opens with an index's name is no point: it is skipped, and
+    the index column with it. The 8 corners of the unit cube at (10, 10,
+    10) are one voxel, the box [10, 11]^3."""
+    corners = [(10 + x, 10 + y, 10 + z) for x, y, z in itertools.product((0, 1), repeat=3)]
+    text = f"{index},0,1,2\n" + "".join(f"{i},{x},{y},{z}\n" for i, (x, y, z) in enumerate(corners))
+    (tmp_path / "p.csv").write_text(text)
+    r = run("info", tmp_path / "p.csv", "--json")
+    assert r.returncode == 0, r.stderr
+    report = json.loads(r.stdout)
+    assert report["voxels"] == 1 and report["bbox"] == [10, 10, 10, 11, 11, 11]
+
+
+def test_a_2d_label_image_names_the_pixel_that_holds_no_label(tmp_path):
+    """A 2D image is pixels everywhere else in isoflow's lines ("1 pixel
+    holds values other than 0 and 1"), but a value that is no label was
+    named at "voxel (3, 4)". The pixel placed is named, as a pixel, by
+    ``info --labels`` and by ``write_labels``."""
+    image = np.zeros((6, 7))
+    image[3, 4] = 0.5
+    np.save(tmp_path / "f.npy", image)
+    r = run("info", tmp_path / "f.npy", "--labels")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert "pixel (3, 4) holds 0.5" in r.stderr and "voxel" not in r.stderr, r.stderr
+    code = "import isoflow, numpy as np; isoflow.write_labels(np.array([[0, 0], [0, -3]]), 'w.npz')"
+    w = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert w.returncode != 0 and "holds -3 at pixel (1, 1)" in w.stderr, w.stderr
+    assert not (tmp_path / "w.npz").exists()

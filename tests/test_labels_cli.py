@@ -329,7 +329,8 @@ def test_labels_of_a_float_store_name_a_fill_value_that_is_no_label(tmp_path, ca
             code, err = refused(*command)
             assert code == 2 and len(err) == 1, err
             voxel = ", ".join(map(str, first))
-            assert f"voxel ({voxel}) holds {fill!r}, the array's fill value, which zarr reads for a chunk never " \
+            cell = "pixel" if len(shape) == 2 else "voxel"
+            assert f"{cell} ({voxel}) holds {fill!r}, the array's fill value, which zarr reads for a chunk never " \
                    "written" in err[0], err
             assert err[0].endswith("write the store with fill_value=0, which a chunk never written then reads as 0")
         zero = zarr.create_array(str(tmp_path / "zero.zarr"), shape=shape, chunks=chunks, dtype="float32",

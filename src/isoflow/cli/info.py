@@ -260,7 +260,9 @@ def format_info(r: Report, name: str, grid: dict | None = None, placed: dict | N
         lines.append(f"  {size:<23}{' x '.join(f'{p:.6g}' for p in placed['pitch'][:space])}{unit}, "
                      f"origin {origin}{unit}{'' if unit else ' (the file says no unit)'}"
                      + fourth + (f", frame {placed['space']}" if placed.get("space") else ""))
-    lines += format_measures(r, placed["pitch"][:3] if placed else grid["pitch"] if grid else None)
+    # a point list's coordinates are lattice units: a voxel is 1 wide, and
+    # a box at 1e12 must not print its two sides as the same 1e+12
+    lines += format_measures(r, placed["pitch"][:3] if placed else grid["pitch"] if grid else 1.0)
     lines += [
         f"  Euler characteristic   {r['euler_characteristic']}",
     ]

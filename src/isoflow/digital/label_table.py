@@ -453,10 +453,11 @@ def as_labels(array, first_layer: int = 0, axis: int = 0, fill: object = None) -
             at = int(np.argmax(bad))
             voxel = np.unravel_index(at, vol.shape)
             where = ", ".join(str(int(i) + (first_layer if d == axis else 0)) for d, i in enumerate(voxel))
+            cell = "pixel" if vol.ndim == 2 else "voxel"  # as the other lines of a 2D image say
             if _is_fill(flat[at], fill):
                 # a store written sparsely holds the value in voxels nobody wrote: the value alone would not say why
-                raise IsoflowError(f"voxel ({where}) holds {flat[at].item()!r}, {FILL_READ}: {why}; {FILL_ZERO}")
-            raise IsoflowError(f"voxel ({where}) holds {flat[at].item()!r}: {why}")
+                raise IsoflowError(f"{cell} ({where}) holds {flat[at].item()!r}, {FILL_READ}: {why}; {FILL_ZERO}")
+            raise IsoflowError(f"{cell} ({where}) holds {flat[at].item()!r}: {why}")
     return flat.astype(kind).reshape(vol.shape)
 
 

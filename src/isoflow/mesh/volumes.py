@@ -591,7 +591,10 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
     first line of column names (``x,y,z``, as pandas' ``to_csv`` writes
     it) is skipped where the next line holds as many numbers; where its
     first name is empty or ``index`` (``,x,y,z``: ``to_csv`` with the
-    frame's index), that first column is the index, not a coordinate.
+    frame's index; ``,0,1,2`` for a frame of an array), that first column
+    is the index, not a coordinate.
+    UTF-8 text, or UTF-16 where a byte-order mark opens it (Windows
+    PowerShell's ``>``); a UTF-8 byte-order mark is skipped.
 
     numpy's compiled reader takes the file when it can; a file it refuses,
     or whose numbers are not all integers in range, is read again line by
@@ -642,7 +645,8 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
         # a big binary one should not be read whole before being refused
         with open(path, "rb") as fh:
             head = fh.read(1024)
-        if b"\0" in head:
+        encoding = _text_encoding(head)
+        if b"\0" in head and encoding != "utf-16":  # (UTF-16 text is half NUL bytes)
             found = sniff_volume_format(path)
             if found is not None:  # a volume without its suffix (or under another one)
                 raise IsoflowError(f"{path}: its content is {found[0]}, but volumes are read by their suffix: rename it "
@@ -656,9 +660,9 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
         check_fits(6 * path.stat().st_size, f"reading the point list {path}",
                    hint="a volume file (.npy, .zarr) holds points far more compactly")
         try:
-            header, index = _header_line(path)
-            points = _read_points_fast(path, b"," in head, header, index)
-            return points if points is not None else _read_points_by_line(path, header, index)
+            header, index = _header_line(path, encoding)
+            points = _read_points_fast(path, b"," in head, header, index, encoding)
+            return points if points is not None else _read_points_by_line(path, header, index, encoding)
         except IsoflowError as exc:
             raise IsoflowError(not_points(path, str(exc))) from None
     except (OSError, UnicodeDecodeError) as exc:
@@ -720,7 +724,17 @@ volume or mesh format)
     return said
 
 
-def _header_line(path: Path) -> tuple[int, bool]:
+def _text_encoding(head: bytes) -> str:
+    """How a point list's text is encoded, from its first bytes: UTF-16
+    where it opens with UTF-16's byte-order mark (what Windows PowerShell's
+    ``>`` and Notepad's "Unicode" write), else UTF-8, a byte-order mark
+    (Windows editors) skipped."""
+    import codecs
+
+    return "utf-16" if head.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)) else "utf-8-sig"
+
+
+def _header_line(path: Path, encoding: str = "utf-8-sig") -> tuple[int, bool]:
     """The number of the line that is a header of column names (``x,y,z``,
     as pandas' ``to_csv`` writes one), 0 where there is none: the first
     line that is neither blank nor a comment, where none of its fields is
@@ -728,9 +742,11 @@ def _header_line(path: Path) -> tuple[int, bool]:
     still refused naming its first line); and whether its first column is
     an index (``to_csv`` writes the frame's index first, named ``""``, or
     ``index`` after ``reset_index``), which is no coordinate: then 2 or 3
-    names follow it."""
+    names follow it. Those names may be ``0, 1, 2``: the column names
+    pandas gives a frame made from an array (``pd.DataFrame(points)``);
+    after an index's name that line cannot be a point."""
     lines = []
-    with open(path, encoding="utf-8-sig") as fh:
+    with open(path, encoding=encoding) as fh:
         for lineno, line in enumerate(fh, 1):
             line = line.split("#", 1)[0].strip()
             if line:
@@ -744,13 +760,17 @@ def _header_line(path: Path) -> tuple[int, bool]:
     names = [f.strip() for f in first.split(",")] if "," in first else first.split()
     numbers = _SPLIT.split(second)
     index = "," in first and len(names) in (3, 4) and names[0].lower() in ("", "index")
+    # ",0,1,2": an array's frame, its index written first (without the index, "0,1,2" is a point)
+    numbered = index and names[1:] == [str(i) for i in range(len(names) - 1)]
     if (len(names) != len(numbers) or len(names) - index not in (2, 3)
-            or any(_NUMBER.fullmatch(f) for f in names) or not all(_NUMBER.fullmatch(f) for f in numbers)):
+            or (any(_NUMBER.fullmatch(f) for f in names) and not numbered)
+            or not all(_NUMBER.fullmatch(f) for f in numbers)):
         return 0, False
     return lineno, index
 
 
-def _read_points_fast(path: Path, commas: bool, header: int = 0, index: bool = False) -> np.ndarray | None:
+def _read_points_fast(path: Path, commas: bool, header: int = 0, index: bool = False,
+                      encoding: str = "utf-8-sig") -> np.ndarray | None:
     """The points by ``np.loadtxt`` (as integers, else as decimals that
     must be integers: "1e3", "2.0"), or None where the file needs the
     line-by-line reader: to be refused with its line, or for separators
@@ -765,7 +785,7 @@ def _read_points_fast(path: Path, commas: bool, header: int = 0, index: bool = F
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # "empty input file": said by the line reader
                 values = np.loadtxt(path, comments="#", delimiter="," if commas else None, ndmin=2, dtype=dtype,
-                                    encoding="utf-8-sig", skiprows=header)
+                                    encoding=encoding, skiprows=header)
             break
         except (ValueError, UnicodeDecodeError):
             continue
@@ -782,7 +802,7 @@ def _read_points_fast(path: Path, commas: bool, header: int = 0, index: bool = F
     return values.astype(np.int64, copy=False)
 
 
-def _read_points_by_line(path: Path, header: int = 0, index: bool = False) -> np.ndarray:
+def _read_points_by_line(path: Path, header: int = 0, index: bool = False, encoding: str = "utf-8-sig") -> np.ndarray:
     """The points, read line by line as a stream (8 bytes a coordinate, as
     loadtxt); the first bad line is refused with its number. The lines up
     to ``header`` (:func:`_header_line`) are skipped, and the first number
@@ -790,7 +810,7 @@ def _read_points_by_line(path: Path, header: int = 0, index: bool = False) -> np
     from array import array
 
     coords, width = array("q"), None
-    with open(path, encoding="utf-8-sig") as fh:  # a byte-order mark (Windows editors) is no coordinate
+    with open(path, encoding=encoding) as fh:  # a byte-order mark (Windows editors) is no coordinate
         for lineno, line in enumerate(fh, 1):
             if lineno <= header:
                 continue
@@ -1396,7 +1416,7 @@ def _unsigned_labels(arr: np.ndarray, path: str | os.PathLike) -> np.ndarray:
         if labels.size and labels.min() < 0:
             at = np.unravel_index(int(np.argmin(labels)), labels.shape)
             raise IsoflowError(f"{path}: a label image holds labels from 0 on, this one holds {arr[at].item()!r} at "
-                               f"voxel ({', '.join(str(int(i)) for i in at)})")
+                               f"{'pixel' if arr.ndim == 2 else 'voxel'} ({', '.join(str(int(i)) for i in at)})")
         labels = labels.view(labels.dtype.str.replace("i", "u"))
     if arr.dtype.kind == "f":
         # a float image has no integer type of its own, and label_table's int64 would make every file
