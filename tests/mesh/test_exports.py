@@ -347,6 +347,6 @@ def test_write_rows_writes_what_savetxt_writes(rng, monkeypatch, binary):
     for rows, line in ((floats, "v %.17g %.17g %.17g\n"), (floats, "%.9g %.6g %.3g\n"), (ints, "f %d %d %d %d\n"),
                        (ints[:0], "f %d %d %d %d\n")):
         ours, theirs = (io.BytesIO(), io.BytesIO()) if binary else (io.StringIO(), io.StringIO())
-        export.write_rows(ours, rows, line)
+        export.write_rows(ours, rows, line, binary=binary)
         np.savetxt(theirs, rows, fmt=line[:-1])
         assert ours.getvalue() == theirs.getvalue(), line

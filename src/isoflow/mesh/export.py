@@ -47,7 +47,6 @@ mesh as LPS. GLB has no such convention.
 from __future__ import annotations
 
 import contextlib
-import io
 import os
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -294,9 +293,10 @@ def write_ply(
             fmt = " ".join(f"%.{_digits(columns[k])}g" if columns[k].dtype.kind == "f" else "%d" for k in names)
             if n:
                 table = np.column_stack([columns[k].astype(np.float64) for k in names])
-                write_rows(fh, table, fmt + "\n")
+                write_rows(fh, table, fmt + "\n", binary=True)
             for size, rows in groups:
-                write_rows(fh, np.column_stack([np.full(len(rows), size), rows]), " ".join(["%d"] * (size + 1)) + "\n")
+                write_rows(fh, np.column_stack([np.full(len(rows), size), rows]), " ".join(["%d"] * (size + 1)) + "\n",
+                           binary=True)
         else:
             vrec = np.empty(n, dtype=[(k, columns[k].dtype.newbyteorder("<")) for k in names])
             for k in names:
@@ -366,8 +366,8 @@ def write_obj(
 ROWS_AT_ONCE = 1 << 16
 
 
-def write_rows(fh, rows: np.ndarray, line: str) -> None:
-    """Write the rows of a 2D table as text, each by ``line`` (its ``%``
+def write_rows(fh, rows: np.ndarray, line: str, *, binary: bool = False) -> None:
+    r"""Write the rows of a 2D table as text, each by ``line`` (its ``%``
     fields, one per column, and the newline at its end), byte for byte as
     ``np.savetxt(fh, rows, fmt=line[:-1])`` writes them. :data:`ROWS_AT_ONCE`
     rows are one ``%`` of the line repeated over their values: savetxt
@@ -376,11 +376,13 @@ def write_rows(fh, rows: np.ndarray, line: str) -> None:
     Parameters
     ----------
     fh : file
-        Open for writing, text or binary (written as ASCII).
+        Open for writing: text, or ``binary`` (written as ASCII).
     rows : numpy.ndarray
         (N, K), K the fields of ``line``.
     line : str
         The format of one row, ending in a newline.
+    binary : bool
+        Whether ``fh`` takes bytes.
 
     Examples
     --------
@@ -390,11 +392,10 @@ def write_rows(fh, rows: np.ndarray, line: str) -> None:
     >>> out.getvalue()
     'f 1 2 3\nf 4 5 6\n'
     """
-    text_file = isinstance(fh, io.TextIOBase)
     for at in range(0, len(rows), ROWS_AT_ONCE):
         part = rows[at:at + ROWS_AT_ONCE]
         text = (line * len(part)) % tuple(part.ravel().tolist())
-        fh.write(text if text_file else text.encode("ascii"))
+        fh.write(text.encode("ascii") if binary else text)
 
 
 def write_stl(path: str | os.PathLike, vertices: np.ndarray, triangles: np.ndarray, *, force: bool = False,
