@@ -1865,6 +1865,41 @@ def test_a_4d_store_is_called_what_its_axes_metadata_names_it(tmp_path, command)
         (tmp_path / "t0.npz").unlink()
 
 
+def test_a_4d_nifti_and_an_ngff_axis_typed_time_are_called_time_series(tmp_path):
+    """The NIfTI standard reserves dim[4] for time (a vector's entries go
+    in dim[5]), yet a 4D NIfTI refused by surface was "a 4th axis of 3
+    entries, time points or channels"; an OME-Zarr axis named "time" of
+    type "time" (NGFF 0.4 names are free, the type says what it is) was
+    refused by every command, info too, with "save one channel"."""
+    nib = pytest.importorskip("nibabel")
+    zarr = pytest.importorskip("zarr")
+    stored = np.zeros((8, 7, 6, 3), np.uint8)
+    stored[2:5, 2:5, 2:4] = 1
+    nib.save(nib.Nifti1Image(stored, np.eye(4)), tmp_path / "bold.nii.gz")
+    assert nib.load(tmp_path / "bold.nii.gz").header["dim"][4] == 3
+    g = zarr.open_group(tmp_path / "time.ome.zarr", mode="w")
+    g.create_array("0", data=stored.transpose(3, 2, 1, 0))
+    g.attrs["multiscales"] = [{"version": "0.4", "axes": [{"name": "time", "type": "time"}]
+                               + [{"name": a, "type": "space"} for a in "zyx"],
+                               "datasets": [{"path": "0", "coordinateTransformations": [
+                                   {"type": "scale", "scale": [1.0, 1.0, 1.0, 1.0]}]}]}]
+    for name in ("bold.nii.gz", "time.ome.zarr"):
+        p = subprocess.run([sys.executable, "-m", "isoflow", "surface", name, "-o", "s.ply"],
+                           capture_output=True, text=True, cwd=tmp_path)
+        assert p.returncode == 2 and p.stderr.count("\n") == 1 and "Traceback" not in p.stderr, p.stderr
+        assert "this one is 4D, shape 8x7x6x3 (a time series of 3 time points along its 4th axis" in p.stderr, p.stderr
+        assert "channel" not in p.stderr and "save one time point as 3D" in p.stderr, p.stderr
+        line = p.stderr.split("give that: ", 1)[1].strip()
+        subprocess.run(sys.executable + line[len("python"):], shell=True, check=True, cwd=tmp_path)
+        with np.load(tmp_path / "t0.npz") as saved:
+            assert np.array_equal(saved[saved.files[0]] > 0, stored[..., 0] > 0)
+        (tmp_path / "t0.npz").unlink()
+    # info analyses a time series as 4D: the store is read, not refused
+    p = subprocess.run([sys.executable, "-m", "isoflow", "info", "time.ome.zarr"], capture_output=True, text=True,
+                       cwd=tmp_path)
+    assert p.returncode == 0 and "4D, shape 8x7x6x3" in p.stdout, p.stderr
+
+
 @pytest.mark.parametrize("command", [["surface", "-o", "s.ply"], ["info", "--labels"]])
 def test_a_4d_array_of_channels_is_not_called_a_time_series(tmp_path, command):
     """A .npy of shape (X, Y, Z, 3) may hold RGB channels as well as three
