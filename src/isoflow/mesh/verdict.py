@@ -24,7 +24,7 @@ from .grid import rounding_words
 #: what the verdict says, first
 VerdictKind = Literal["agree", "disagree", "not_converged", "self_intersecting", "no_solid", "no_reference"]
 #: why the resolution stepping stopped before the Betti numbers settled
-StopKind = Literal["asked", "max_resolution", "time_limit", "memory"]
+StopKind = Literal["asked", "max_resolution", "time_limit", "memory", "no_inside"]
 #: the facts said after the verdict
 NoteKind = Literal["dropped_faces", "welded", "repeated_faces", "double_sided", "open", "inconsistent",
                    "nonmanifold_edges", "nonmanifold_vertices", "nested", "overlap", "self_intersecting",
@@ -43,6 +43,9 @@ class Stop:
     ``time_limit``, bytes for ``memory``). An ``asked`` stop has a
     ``limit`` where the resolutions asked pass ``max_resolution`` (which
     caps only the doubling; ``resolution`` is then the last one asked).
+    A ``no_inside`` stop ends the stepping after the resolutions asked
+    where a non-orientable component leaves nothing to compare with: no
+    finer grid settles what its winding number reads.
     """
 
     kind: StopKind
@@ -178,12 +181,16 @@ def stop_text(stop: Stop) -> str:
     'the resolutions asked (256 is past --max-resolution 64, which caps only the doubling)'
     >>> stop_text(Stop("time_limit", limit=0.5, resolution=512, estimate=0.456, option="time_limit"))
     'the time limit (0.5 s, --time-limit): 512 would end past it (about 0.46 s more)'
+    >>> stop_text(Stop("no_inside"))
+    'the resolutions asked: a non-orientable component has no inside, so no finer grid settles the digital rows'
     """
     flag = option_flag(stop.option) if stop.option else ""
     if stop.kind == "asked":
         if stop.limit is not None:  # asked beyond the cap: the cap did not stop anything asked
             return f"the resolutions asked ({stop.resolution} is past {flag} {stop.limit}, which caps only the doubling)"
         return "the resolutions asked"
+    if stop.kind == "no_inside":
+        return "the resolutions asked: a non-orientable component has no inside, so no finer grid settles the digital rows"
     if stop.kind == "max_resolution":
         return f"the largest resolution allowed ({stop.limit}, {flag})"
     if stop.kind == "time_limit":
@@ -216,7 +223,7 @@ def head_text(v: GenusVerdict) -> str:
                 + (f" (its enclosed volume is {volume:.3g})" if volume is not None else "")
                 + ", so there is no solid genus to check")
     if v.kind == "no_reference":
-        return f"no {ref_name} to compare" if digital else "no mesh genus to compare"
+        return (f"no {ref_name} to compare" if digital else "no mesh genus to compare") + stop
     if v.kind == "not_converged":
         trail = ", ".join(f"{d['resolution']}: {tuple(d['betti'])}" for d in digital[-3:])
         why = ("the digital Betti numbers still change" if len(digital) > 1 else
