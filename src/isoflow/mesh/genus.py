@@ -1472,7 +1472,12 @@ def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, f
     if fill == "flood" and w["solid"].get("cavities"):
         # the flood fill is the solid with its cavities filled: a torus inside a hollow ball is lost to it,
         # which is why its target is not the mesh's genus
-        notes.append(Note("flood_cavities", {"n": w["solid"]["cavities"]}))
+        solid = w["solid"]
+        # what the filling loses: bodies nested in the cavities (their surfaces swallowed), and handles
+        # (of those bodies, or of a cavity's own surface: a torus-shaped hole)
+        notes.append(Note("flood_cavities", {"n": solid["cavities"],
+                                             "inside": max(0, solid["bodies"] - solid["filled_bodies"]),
+                                             "handles": max(0, solid["genus"] - solid["filled_genus"])}))
     if "error" in w["manifold3d"]:
         notes.append(Note("manifold3d_refused", {"error": w["manifold3d"]["error"]}))
     mesh = w["mesh"]

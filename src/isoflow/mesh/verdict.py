@@ -428,6 +428,33 @@ def _voxel_contact_words(pitch: float, shape, voxels: int, connectivity: int, be
     return said
 
 
+def _flood_cavity_words(n: int, inside: int | None = None, handles: int | None = None) -> str:
+    """What ``--fill flood`` loses of a solid with ``n`` cavities: the
+    ``inside`` bodies nested in them and ``handles`` (theirs, or a cavity's
+    own surface's), each said only where there are some (None: a verdict
+    written before they were counted).
+
+    Examples
+    --------
+    >>> _flood_cavity_words(1, 0, 0)
+    "--fill flood fills the solid's 1 cavity (manifold3d), with nothing inside"
+    >>> _flood_cavity_words(1, 1, 1)
+    "--fill flood fills the solid's 1 cavity (manifold3d) and the body inside, whose handle its digital genus \
+lacks; the default --fill winding keeps it"
+    """
+    said = f"--fill flood fills the solid's {counted(n, 'cavity', 'cavities')} (manifold3d)"
+    if inside is None or handles is None:
+        return f"{said} and the surfaces inside, whose handles its digital genus lacks; the default --fill winding keeps them"
+    if inside:
+        said += f" and the {'body' if inside == 1 else f'{inside} bodies'} inside"
+    if handles:
+        which, them = ("handle", "it") if handles == 1 else (f"{handles} handles", "them")
+        return f"{said}, whose {which} its digital genus lacks; the default --fill winding keeps {them}"
+    if inside:
+        return f"{said}; the default --fill winding keeps {'it' if inside == 1 else 'them'}"
+    return f"{said}, with nothing inside"
+
+
 def _cavity_words(n: int, resolution: int, solid: int | None = None) -> str:
     """The ``cavities`` note: the digital solid's cavities (b2) at the
     finest grid, beside those of the solid manifold3d builds (``solid``;
@@ -480,9 +507,7 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
     "float64_rounding": lambda near, spacing, median_edge, share, defects=(), precision="float64": rounding_words(
         near, spacing, median_edge, share, tuple(defects), " above", precision),
     "cavities": _cavity_words,
-    "flood_cavities": lambda n: (
-        f"--fill flood fills the solid's {counted(n, 'cavity', 'cavities')} (manifold3d) and the surfaces "
-        "inside, whose handles its digital genus lacks; the default --fill winding keeps them"),
+    "flood_cavities": _flood_cavity_words,
     "coarse": lambda resolution, genus, pitch: (
         f"at resolution {resolution} the grid is too coarse: digital genus {genus} "
         f"(pitch {pitch:.4g}; handles thinner than a voxel close or open)"),
