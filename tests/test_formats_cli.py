@@ -1172,8 +1172,8 @@ def test_flow_force_replaces_step_volumes_of_any_suffix_and_warns_once(tmp_path,
     (out / "step_notes.txt").write_text("mine")  # not a step file: kept
     assert main(["flow", str(tmp_path / "small.npz"), "--out", str(out), "--force", "--volumes", "vox"]) == 0
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"isoflow flow: warning: {out}/step_000.vox: MagicaVoxel keeps no voxel size or origin; pitch 1.0 "
-                   "and origin [1.0, 2.0, 3.0] are not written"], err
+    assert err == [f"isoflow flow: warning: {out}/step_000.vox: MagicaVoxel keeps no voxel size or origin; pitch [1, 1, 1] "
+                   "and origin [1, 2, 3] are not written"], err
     steps = sorted(p.name for p in out.glob("step_*"))
     plys = sorted(p.name for p in out.glob("step_*.ply"))
     assert steps == sorted([*plys, *(n.replace(".ply", ".vox") for n in plys), "step_notes.txt"])
@@ -1863,6 +1863,39 @@ def test_a_4d_store_is_called_what_its_axes_metadata_names_it(tmp_path, command)
         subprocess.run(sys.executable + line[len("python"):], shell=True, check=True, cwd=tmp_path)
         assert isoflow.read_labels(tmp_path / "t0.npz").array.shape == (8, 7, 6)
         (tmp_path / "t0.npz").unlink()
+
+
+def test_dropped_placement_warnings_write_numbers_as_the_npy_one_does(tmp_path):
+    """A flow's step volumes of an object placed at origin [2, 3] (pitch 1)
+    or [2, 3, 4] (pitch 0.5): the .npy's warning said `origin [2, 3]`, the
+    PNG's and MagicaVoxel's `origin [4.0, 5.0]`, `pitch 0.5`. Every one
+    writes whole numbers whole and a pitch per axis, as errors.coordinates
+    does; the place each names is the .npy's origin moved by its lattice
+    offset (voxel 0's place, which those formats read back as 0)."""
+    flat = np.zeros((8, 8), bool)
+    flat[2:6, 2:6] = True
+    isoflow.write_volume(isoflow.DigitalObject(flat, origin=np.array([2.0, 3.0])), tmp_path / "img.npz")
+    cube = np.zeros((8, 8, 8), bool)
+    cube[2:6, 2:6, 2:6] = True
+    isoflow.write_volume(isoflow.DigitalObject(cube, origin=np.array([2.0, 3.0, 4.0]), pitch=0.5), tmp_path / "vol.npz")
+
+    def warning(name, suffix):
+        out = f"out_{suffix[1:]}_{name[:3]}"
+        p = subprocess.run([sys.executable, "-m", "isoflow", "flow", name, "--steps", "1", "--out", out,
+                            "--volumes", suffix], capture_output=True, text=True, cwd=tmp_path)
+        assert p.returncode == 0, p.stderr
+        return next(line for line in p.stderr.splitlines() if "warning" in line and "step_000" in line)
+
+    for name, suffix, pitch in (("img.npz", ".png", 1.0), ("vol.npz", ".vox", 0.5)):
+        kept, dropped = warning(name, ".npy"), warning(name, suffix)
+        origin = [float(x) for x in re.search(r"origin \[([^\]]*)\]", kept).group(1).split(", ")]
+        offset = [int(x) for x in re.search(r"lattice offset \[([^\]]*)\]", kept).group(1).split(", ")]
+        place = [o + k * pitch for o, k in zip(origin, offset)]
+        assert all(x == int(x) for x in place), place
+        assert f"origin [{', '.join(str(int(x)) for x in place)}]" in dropped, dropped
+        assert not re.search(r"\d\.0\b", kept + dropped), (kept, dropped)
+        if suffix == ".vox":
+            assert "pitch [0.5, 0.5, 0.5]" in dropped and "pitch [0.5, 0.5, 0.5]" in kept, (kept, dropped)
 
 
 def test_a_4d_nifti_and_an_ngff_axis_typed_time_are_called_time_series(tmp_path):
