@@ -1172,8 +1172,8 @@ def test_flow_force_replaces_step_volumes_of_any_suffix_and_warns_once(tmp_path,
     (out / "step_notes.txt").write_text("mine")  # not a step file: kept
     assert main(["flow", str(tmp_path / "small.npz"), "--out", str(out), "--force", "--volumes", "vox"]) == 0
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"isoflow flow: warning: {out}/step_000.vox: MagicaVoxel keeps no voxel size or origin; pitch 1.0 "
-                   "and origin [1.0, 2.0, 3.0] are not written"], err
+    assert err == [f"isoflow flow: warning: {out}/step_000.vox: MagicaVoxel keeps no voxel size or origin; pitch [1, 1, 1] "
+                   "and origin [1, 2, 3] are not written"], err
     steps = sorted(p.name for p in out.glob("step_*"))
     plys = sorted(p.name for p in out.glob("step_*.ply"))
     assert steps == sorted([*plys, *(n.replace(".ply", ".vox") for n in plys), "step_notes.txt"])
@@ -1863,6 +1863,74 @@ def test_a_4d_store_is_called_what_its_axes_metadata_names_it(tmp_path, command)
         subprocess.run(sys.executable + line[len("python"):], shell=True, check=True, cwd=tmp_path)
         assert isoflow.read_labels(tmp_path / "t0.npz").array.shape == (8, 7, 6)
         (tmp_path / "t0.npz").unlink()
+
+
+def test_dropped_placement_warnings_write_numbers_as_the_npy_one_does(tmp_path):
+    """A flow's step volumes of an object placed at origin [2, 3] (pitch 1)
+    or [2, 3, 4] (pitch 0.5): the .npy's warning said `origin [2, 3]`, the
+    PNG's and MagicaVoxel's `origin [4.0, 5.0]`, `pitch 0.5`. Every one
+    writes whole numbers whole and a pitch per axis, as errors.coordinates
+    does; the place each names is the .npy's origin moved by its lattice
+    offset (voxel 0's place, which those formats read back as 0)."""
+    flat = np.zeros((8, 8), bool)
+    flat[2:6, 2:6] = True
+    isoflow.write_volume(isoflow.DigitalObject(flat, origin=np.array([2.0, 3.0])), tmp_path / "img.npz")
+    cube = np.zeros((8, 8, 8), bool)
+    cube[2:6, 2:6, 2:6] = True
+    isoflow.write_volume(isoflow.DigitalObject(cube, origin=np.array([2.0, 3.0, 4.0]), pitch=0.5), tmp_path / "vol.npz")
+
+    def warning(name, suffix):
+        out = f"out_{suffix[1:]}_{name[:3]}"
+        p = subprocess.run([sys.executable, "-m", "isoflow", "flow", name, "--steps", "1", "--out", out,
+                            "--volumes", suffix], capture_output=True, text=True, cwd=tmp_path)
+        assert p.returncode == 0, p.stderr
+        return next(line for line in p.stderr.splitlines() if "warning" in line and "step_000" in line)
+
+    for name, suffix, pitch in (("img.npz", ".png", 1.0), ("vol.npz", ".vox", 0.5)):
+        kept, dropped = warning(name, ".npy"), warning(name, suffix)
+        origin = [float(x) for x in re.search(r"origin \[([^\]]*)\]", kept).group(1).split(", ")]
+        offset = [int(x) for x in re.search(r"lattice offset \[([^\]]*)\]", kept).group(1).split(", ")]
+        place = [o + k * pitch for o, k in zip(origin, offset)]
+        assert all(x == int(x) for x in place), place
+        assert f"origin [{', '.join(str(int(x)) for x in place)}]" in dropped, dropped
+        assert not re.search(r"\d\.0\b", kept + dropped), (kept, dropped)
+        if suffix == ".vox":
+            assert "pitch [0.5, 0.5, 0.5]" in dropped and "pitch [0.5, 0.5, 0.5]" in kept, (kept, dropped)
+
+
+def test_a_4d_nifti_and_an_ngff_axis_typed_time_are_called_time_series(tmp_path):
+    """The NIfTI standard reserves dim[4] for time (a vector's entries go
+    in dim[5]), yet a 4D NIfTI refused by surface was "a 4th axis of 3
+    entries, time points or channels"; an OME-Zarr axis named "time" of
+    type "time" (NGFF 0.4 names are free, the type says what it is) was
+    refused by every command, info too, with "save one channel"."""
+    nib = pytest.importorskip("nibabel")
+    zarr = pytest.importorskip("zarr")
+    stored = np.zeros((8, 7, 6, 3), np.uint8)
+    stored[2:5, 2:5, 2:4] = 1
+    nib.save(nib.Nifti1Image(stored, np.eye(4)), tmp_path / "bold.nii.gz")
+    assert nib.load(tmp_path / "bold.nii.gz").header["dim"][4] == 3
+    g = zarr.open_group(tmp_path / "time.ome.zarr", mode="w")
+    g.create_array("0", data=stored.transpose(3, 2, 1, 0))
+    g.attrs["multiscales"] = [{"version": "0.4", "axes": [{"name": "time", "type": "time"}]
+                               + [{"name": a, "type": "space"} for a in "zyx"],
+                               "datasets": [{"path": "0", "coordinateTransformations": [
+                                   {"type": "scale", "scale": [1.0, 1.0, 1.0, 1.0]}]}]}]
+    for name in ("bold.nii.gz", "time.ome.zarr"):
+        p = subprocess.run([sys.executable, "-m", "isoflow", "surface", name, "-o", "s.ply"],
+                           capture_output=True, text=True, cwd=tmp_path)
+        assert p.returncode == 2 and p.stderr.count("\n") == 1 and "Traceback" not in p.stderr, p.stderr
+        assert "this one is 4D, shape 8x7x6x3 (a time series of 3 time points along its 4th axis" in p.stderr, p.stderr
+        assert "channel" not in p.stderr and "save one time point as 3D" in p.stderr, p.stderr
+        line = p.stderr.split("give that: ", 1)[1].strip()
+        subprocess.run(sys.executable + line[len("python"):], shell=True, check=True, cwd=tmp_path)
+        with np.load(tmp_path / "t0.npz") as saved:
+            assert np.array_equal(saved[saved.files[0]] > 0, stored[..., 0] > 0)
+        (tmp_path / "t0.npz").unlink()
+    # info analyses a time series as 4D: the store is read, not refused
+    p = subprocess.run([sys.executable, "-m", "isoflow", "info", "time.ome.zarr"], capture_output=True, text=True,
+                       cwd=tmp_path)
+    assert p.returncode == 0 and "4D, shape 8x7x6x3" in p.stdout, p.stderr
 
 
 @pytest.mark.parametrize("command", [["surface", "-o", "s.ply"], ["info", "--labels"]])

@@ -161,7 +161,7 @@ def test_step_volumes_a_format_cannot_hold_are_refused_before_the_flow(tmp_path)
     np.save(tmp_path / "img.npy", np.ones((4, 5), bool))
     isoflow.write_volume(isoflow.DigitalObject(np.ones((3, 3, 3), bool), pitch=(1.0, 1.0, 2.0)), tmp_path / "a.npz")
     for name, why in (("img.npy", "binvox holds 3D voxels, this object is 2D"),
-                      ("a.npz", "binvox holds one voxel size and this object's pitch is [1.0, 1.0, 2.0]")):
+                      ("a.npz", "binvox holds one voxel size and this object's pitch is [1, 1, 2]")):
         rc, stdout, err = run("flow", tmp_path / name, "--out", tmp_path / "new", "--volumes", ".binvox")
         assert rc == 2 and stdout == ""
         assert err.strip().splitlines() == [f"isoflow flow: error: {tmp_path / 'new' / 'step_000.binvox'}: {why}"

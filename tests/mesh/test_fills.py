@@ -695,10 +695,41 @@ def test_flood_fill_names_the_cavities_it_fills():
     flood = verify_genus((mesh.vertices, mesh.faces), (24, 48), step=False, fill="flood")
     assert flood.reference == torus_genus == 1 and flood.digital[-1]["genus"] == 0 and flood.kind == "agree"
     assert flood.filled_genus == 0
-    assert Note("flood_cavities", {"n": 1}) in flood.notes
-    assert "--fill flood fills the solid's 1 cavity (manifold3d)" in flood.verdict
+    # the cavity is the torus's shape: its handle is what the flood loses, no body lies inside
+    assert Note("flood_cavities", {"n": 1, "inside": 0, "handles": torus_genus}) in flood.notes
+    assert ("--fill flood fills the solid's 1 cavity (manifold3d), whose handle its digital genus lacks"
+            in flood.verdict)
     winding = verify_genus((mesh.vertices, mesh.faces), (24, 48), step=False)
     assert winding.kind == "agree" and "flood_cavities" not in {n.kind for n in winding.notes}
+
+
+@pytest.mark.parametrize("inner", [None, "torus"])
+def test_flood_note_names_surfaces_inside_only_where_a_surface_is_nested(tmp_path, inner):
+    """A ball with a ball-shaped cavity (a hollow ball) and nothing in it:
+    the note said the flood fills "the surfaces inside, whose handles its
+    digital genus lacks", though no surface is inside and no handle lost.
+    With a torus in the cavity (trimesh: watertight, Euler number 0, genus
+    1) the note still names the body inside and its handle."""
+    import trimesh
+
+    outer, hole = trimesh.creation.icosphere(3, 2.0), trimesh.creation.icosphere(3, 1.5)
+    hole.invert()
+    parts = [outer, hole]
+    if inner == "torus":
+        torus = trimesh.creation.torus(0.8, 0.25)
+        assert torus.is_watertight and torus.euler_number == 0
+        parts.append(torus)
+    mesh = trimesh.util.concatenate(parts)
+    mesh.export(tmp_path / "hollow.ply")
+    done = subprocess.run([sys.executable, "-m", "isoflow", "genus", "hollow.ply", "--fill", "flood", "--resolution",
+                           "24", "48", "--no-step", "--json"], capture_output=True, text=True, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    verdict = json.loads(done.stdout)["verdict"]
+    assert "--fill flood fills the solid's 1 cavity (manifold3d)" in verdict, verdict
+    if inner is None:
+        assert "inside," not in verdict and "handle" not in verdict and "with nothing inside" in verdict, verdict
+    else:
+        assert "and the body inside, whose handle its digital genus lacks; the default --fill winding keeps it" in verdict
 
 
 def test_fill_notes_count_one_in_the_singular():

@@ -304,6 +304,33 @@ def test_strict_genus_says_what_genus_does_without_it(tmp_path, repair):
     assert verdict.mesh["watertight"] and verdict.mesh["genus"] == (2 - torus.euler_number) // 2 == 1
 
 
+@pytest.mark.parametrize("command", ["genus", "voxelize"])
+def test_strict_refusal_counts_each_edge_of_a_repeated_face_once(tmp_path, command):
+    """An icosphere with 10 faces listed twice: each copied edge is used by
+    three faces (non-manifold) and twice one way (inconsistent). The line
+    said "24 non-manifold edges, 18 inconsistently oriented edges", which
+    reads as 42 defective edges; it says the 18 are among the 24. The
+    counts are trimesh's: faces per unique edge, and the directed uses."""
+    sphere = trimesh.creation.icosphere(2)
+    faces = np.vstack([sphere.faces, sphere.faces[:10]])
+    mesh = trimesh.Trimesh(sphere.vertices, faces, process=False)
+    uses = np.bincount(mesh.edges_unique_inverse, minlength=len(mesh.edges_unique))
+    forward = np.bincount(mesh.edges_unique_inverse[mesh.edges[:, 0] < mesh.edges[:, 1]],
+                          minlength=len(mesh.edges_unique))
+    nonmanifold = uses > 2
+    inconsistent = (uses >= 2) & (2 * forward != uses)
+    assert nonmanifold.sum() > 0 and inconsistent.sum() > 0 and not (inconsistent & ~nonmanifold).any()
+    mesh.export(tmp_path / "twice.ply")
+    extra = ["--no-step", "-q"] if command == "genus" else ["-o", "v.npz", "-q"]
+    refused = subprocess.run([sys.executable, "-m", "isoflow", command, "twice.ply", "--strict", "--resolution", "16",
+                              *extra], capture_output=True, text=True, cwd=tmp_path)
+    line = refused.stderr.strip()
+    assert refused.returncode == 2 and "\n" not in line and "Traceback" not in line, line
+    assert (f"0 boundary edges, {nonmanifold.sum()} non-manifold edges, {inconsistent.sum()} inconsistently "
+            "oriented edges (all among the non-manifold ones)") in line, line
+    assert not (tmp_path / "v.npz").exists()
+
+
 def test_strict_genus_of_an_open_mesh_says_it_is_taken_as_it_stands(tmp_path):
     box = trimesh.creation.box()
     trimesh.Trimesh(box.vertices, box.faces[1:], process=False).export(tmp_path / "open.ply")

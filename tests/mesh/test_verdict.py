@@ -573,6 +573,31 @@ def test_a_moebius_band_is_said_to_be_non_orientable(tmp_path, capsys, twists):
     assert "1 inconsistently oriented)" not in verdict
 
 
+def test_a_moebius_band_stops_after_the_resolutions_asked(tmp_path):
+    """A Moebius band has no inside, and nothing to compare its digital
+    rows with: the verdict said so, yet the command kept doubling the grid
+    to --max-resolution (1024: hundreds of components, seconds) for
+    nothing. It stops after the resolutions asked and says why; an open
+    mesh that is orientable (cube_no_bottom.obj) still steps."""
+    import subprocess
+    import sys
+
+    band = _band(1)
+    fixed = band.copy()
+    fixed.fix_normals()
+    assert not fixed.is_winding_consistent  # trimesh: no turning of its faces agrees
+    band.export(tmp_path / "band.obj")
+    done = subprocess.run([sys.executable, "-m", "isoflow", "genus", "band.obj", "--max-resolution", "256", "--json"],
+                          capture_output=True, text=True, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    r = json.loads(done.stdout)
+    assert [d["resolution"] for d in r["digital"]] == [64, 128]  # the default resolutions, none doubled
+    assert r["stop"]["kind"] == "no_inside"
+    assert r["verdict"].startswith("no mesh genus to compare; stopped by the resolutions asked: a non-orientable")
+    r = json_of(MESHES / "cube_no_bottom.obj", "--resolution", 8, "--max-resolution", 64)
+    assert len(r["digital"]) > 1 and (r["stop"] or {}).get("kind") != "no_inside"
+
+
 def test_cavities_of_the_grid_that_the_solid_has_not_are_not_called_nested_shells():
     """rabbit.obj's nine primitives, united by manifold3d, bound no cavity
     (no shell of its union has negative volume); at 256 across the

@@ -715,7 +715,7 @@ def test_inconsistent_and_nonmanifold_counts():
     v, f = box_mesh([0, 0, 0], [1, 1, 1])
     d = mesh_defects(v, f)
     assert d == {"boundary_edges": 0, "nonmanifold_edges": 0, "inconsistent_edges": 0,
-                 "components": 1, "edges": 18, "watertight": True}
+                 "inconsistent_nonmanifold_edges": 0, "components": 1, "edges": 18, "watertight": True}
     flipped = f.copy()
     flipped[0] = flipped[0, ::-1]
     d = mesh_defects(v, flipped)

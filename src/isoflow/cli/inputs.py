@@ -490,7 +490,8 @@ def one_time_point(path: str | Path, shape: tuple[int, ...], label: float | None
     that takes one 3D volume: save one entry of its 4th axis as a 3D file,
     voxel size and origin kept, and give that. A .npy does not say
     whether that axis is time or channels (RGB), so the line names both;
-    where the file names it (an OME-Zarr image's or a TIFF's ``t``), the line says so
+    where the file names it (an OME-Zarr image's or a TIFF's ``t``; a
+    NIfTI's dim[4], time by its standard), the line says so
     (:func:`~isoflow.mesh.formats.registry.fourth_axis_words`).
 
     There is no option that picks a time point: the one line of Python is

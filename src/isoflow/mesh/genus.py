@@ -881,7 +881,9 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] | None
         ``progress(done, total)`` per resolution.
     step : bool
         Double the resolution until the Betti numbers of the last two agree,
-        within ``max_resolution``, ``time_limit`` (seconds) and the memory.
+        within ``max_resolution``, ``time_limit`` (seconds) and the memory;
+        not for a self-intersecting mesh, nor for a non-orientable one with
+        nothing to compare (no inside: the stop ``"no_inside"``).
     max_resolution : int
         The doubling stops before a resolution beyond this (the verdict's
         ``stop`` says so); it caps only the doubling: ``resolutions`` past
@@ -1002,14 +1004,21 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] | None
         # connectivity does, the voxels at the surface's own grid do
         reference = target = contacts["betti"][1]
         bodies, source = contacts["betti"][0], "voxels"
+    # a non-orientable component has no inside: with nothing else to compare
+    # against, no finer grid settles what its winding number reads, and the
+    # doubling only multiplies components (a Moebius band: hundreds at 1024)
+    no_inside = bool(w["mesh"]["non_orientable"]) and target is None
     try:  # with strict, a mesh that is not watertight is refused here
         digital, stop = digital_steps(
-            *voxelised, resolutions, connectivity, step=step and not w["crossing_self"], max_resolution=max_resolution,
+            *voxelised, resolutions, connectivity, step=step and not w["crossing_self"] and not no_inside,
+            max_resolution=max_resolution,
             time_limit=time_limit, target=target, progress=progress, on_resolution=on_resolution,
             strict=strict, fill=fill, bodies=bodies, t_junctions=t_junctions,
             joined=None if contacts is not None else touch_joined_bodies(w, f, connectivity, fill, bodies))
     except IsoflowError as exc:
         raise exc.at(name) from None  # a refused grid keeps its command-line words
+    if step and no_inside and stop is not None:
+        stop = Stop("no_inside")
     stable = len(digital) >= 2 and digital[-1]["betti"] == digital[-2]["betti"]
     kind = verdict_kind(w, digital, target, stable, bodies)
     return GenusVerdict(
@@ -1463,7 +1472,12 @@ def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, f
     if fill == "flood" and w["solid"].get("cavities"):
         # the flood fill is the solid with its cavities filled: a torus inside a hollow ball is lost to it,
         # which is why its target is not the mesh's genus
-        notes.append(Note("flood_cavities", {"n": w["solid"]["cavities"]}))
+        solid = w["solid"]
+        # what the filling loses: bodies nested in the cavities (their surfaces swallowed), and handles
+        # (of those bodies, or of a cavity's own surface: a torus-shaped hole)
+        notes.append(Note("flood_cavities", {"n": solid["cavities"],
+                                             "inside": max(0, solid["bodies"] - solid["filled_bodies"]),
+                                             "handles": max(0, solid["genus"] - solid["filled_genus"])}))
     if "error" in w["manifold3d"]:
         notes.append(Note("manifold3d_refused", {"error": w["manifold3d"]["error"]}))
     mesh = w["mesh"]

@@ -1408,6 +1408,9 @@ def mesh_defects(vertices, faces) -> dict:
         inconsistent_edges edges used by two or more faces whose directions do
                            not balance (for a two-face edge: both faces run
                            a->b; orientation cannot be consistent there)
+        inconsistent_nonmanifold_edges
+                           those of them also non-manifold (more than two
+                           faces), counted in both counts above
         components         face components, faces joined across shared edges
         edges              number of distinct undirected edges
         watertight         no boundary, non-manifold or inconsistent edge
@@ -1472,11 +1475,14 @@ def defect_counts(fwd: np.ndarray, bwd: np.ndarray, components: int) -> dict:
     counts = fwd + bwd
     boundary = int((counts == 1).sum())
     nonmanifold = int((counts > 2).sum())
-    inconsistent = int(((counts >= 2) & (fwd != bwd)).sum())
+    unbalanced = fwd != bwd
+    inconsistent = int(((counts >= 2) & unbalanced).sum())
     return {
         "boundary_edges": boundary,
         "nonmanifold_edges": nonmanifold,
         "inconsistent_edges": inconsistent,
+        # a repeated face makes its edges both: a line naming the two counts says the overlap
+        "inconsistent_nonmanifold_edges": int(((counts > 2) & unbalanced).sum()),
         "components": components,
         "edges": int(len(counts)),
         "watertight": boundary == 0 and nonmanifold == 0 and inconsistent == 0,

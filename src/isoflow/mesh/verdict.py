@@ -24,7 +24,7 @@ from .grid import rounding_words
 #: what the verdict says, first
 VerdictKind = Literal["agree", "disagree", "not_converged", "self_intersecting", "no_solid", "no_reference"]
 #: why the resolution stepping stopped before the Betti numbers settled
-StopKind = Literal["asked", "max_resolution", "time_limit", "memory"]
+StopKind = Literal["asked", "max_resolution", "time_limit", "memory", "no_inside"]
 #: the facts said after the verdict
 NoteKind = Literal["dropped_faces", "welded", "repeated_faces", "double_sided", "open", "inconsistent",
                    "nonmanifold_edges", "nonmanifold_vertices", "nested", "overlap", "self_intersecting",
@@ -43,6 +43,9 @@ class Stop:
     ``time_limit``, bytes for ``memory``). An ``asked`` stop has a
     ``limit`` where the resolutions asked pass ``max_resolution`` (which
     caps only the doubling; ``resolution`` is then the last one asked).
+    A ``no_inside`` stop ends the stepping after the resolutions asked
+    where a non-orientable component leaves nothing to compare with: no
+    finer grid settles what its winding number reads.
     """
 
     kind: StopKind
@@ -178,12 +181,16 @@ def stop_text(stop: Stop) -> str:
     'the resolutions asked (256 is past --max-resolution 64, which caps only the doubling)'
     >>> stop_text(Stop("time_limit", limit=0.5, resolution=512, estimate=0.456, option="time_limit"))
     'the time limit (0.5 s, --time-limit): 512 would end past it (about 0.46 s more)'
+    >>> stop_text(Stop("no_inside"))
+    'the resolutions asked: a non-orientable component has no inside, so no finer grid settles the digital rows'
     """
     flag = option_flag(stop.option) if stop.option else ""
     if stop.kind == "asked":
         if stop.limit is not None:  # asked beyond the cap: the cap did not stop anything asked
             return f"the resolutions asked ({stop.resolution} is past {flag} {stop.limit}, which caps only the doubling)"
         return "the resolutions asked"
+    if stop.kind == "no_inside":
+        return "the resolutions asked: a non-orientable component has no inside, so no finer grid settles the digital rows"
     if stop.kind == "max_resolution":
         return f"the largest resolution allowed ({stop.limit}, {flag})"
     if stop.kind == "time_limit":
@@ -216,7 +223,7 @@ def head_text(v: GenusVerdict) -> str:
                 + (f" (its enclosed volume is {volume:.3g})" if volume is not None else "")
                 + ", so there is no solid genus to check")
     if v.kind == "no_reference":
-        return f"no {ref_name} to compare" if digital else "no mesh genus to compare"
+        return (f"no {ref_name} to compare" if digital else "no mesh genus to compare") + stop
     if v.kind == "not_converged":
         trail = ", ".join(f"{d['resolution']}: {tuple(d['betti'])}" for d in digital[-3:])
         why = ("the digital Betti numbers still change" if len(digital) > 1 else
@@ -421,6 +428,33 @@ def _voxel_contact_words(pitch: float, shape, voxels: int, connectivity: int, be
     return said
 
 
+def _flood_cavity_words(n: int, inside: int | None = None, handles: int | None = None) -> str:
+    """What ``--fill flood`` loses of a solid with ``n`` cavities: the
+    ``inside`` bodies nested in them and ``handles`` (theirs, or a cavity's
+    own surface's), each said only where there are some (None: a verdict
+    written before they were counted).
+
+    Examples
+    --------
+    >>> _flood_cavity_words(1, 0, 0)
+    "--fill flood fills the solid's 1 cavity (manifold3d), with nothing inside"
+    >>> _flood_cavity_words(1, 1, 1)
+    "--fill flood fills the solid's 1 cavity (manifold3d) and the body inside, whose handle its digital genus \
+lacks; the default --fill winding keeps it"
+    """
+    said = f"--fill flood fills the solid's {counted(n, 'cavity', 'cavities')} (manifold3d)"
+    if inside is None or handles is None:
+        return f"{said} and the surfaces inside, whose handles its digital genus lacks; the default --fill winding keeps them"
+    if inside:
+        said += f" and the {'body' if inside == 1 else f'{inside} bodies'} inside"
+    if handles:
+        which, them = ("handle", "it") if handles == 1 else (f"{handles} handles", "them")
+        return f"{said}, whose {which} its digital genus lacks; the default --fill winding keeps {them}"
+    if inside:
+        return f"{said}; the default --fill winding keeps {'it' if inside == 1 else 'them'}"
+    return f"{said}, with nothing inside"
+
+
 def _cavity_words(n: int, resolution: int, solid: int | None = None) -> str:
     """The ``cavities`` note: the digital solid's cavities (b2) at the
     finest grid, beside those of the solid manifold3d builds (``solid``;
@@ -473,9 +507,7 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
     "float64_rounding": lambda near, spacing, median_edge, share, defects=(), precision="float64": rounding_words(
         near, spacing, median_edge, share, tuple(defects), " above", precision),
     "cavities": _cavity_words,
-    "flood_cavities": lambda n: (
-        f"--fill flood fills the solid's {counted(n, 'cavity', 'cavities')} (manifold3d) and the surfaces "
-        "inside, whose handles its digital genus lacks; the default --fill winding keeps them"),
+    "flood_cavities": _flood_cavity_words,
     "coarse": lambda resolution, genus, pitch: (
         f"at resolution {resolution} the grid is too coarse: digital genus {genus} "
         f"(pitch {pitch:.4g}; handles thinner than a voxel close or open)"),

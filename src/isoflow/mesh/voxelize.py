@@ -169,6 +169,38 @@ PAIR_BYTES = 18
 ZARR_HINT = "or write it slab by slab to a zarr store (isoflow.voxelize_to_zarr)"
 
 
+def inconsistent_text(n: int, nonmanifold: int, left: str = "") -> str:
+    """The inconsistently oriented edges as a line beside the non-manifold
+    edges counts them, saying how many of them that count already holds
+    (a repeated face makes each of its edges both).
+
+    Parameters
+    ----------
+    n : int
+        The inconsistently oriented edges.
+    nonmanifold : int
+        Those of them that are also non-manifold.
+    left : str
+        Words after the count (" left" once faces are turned).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> inconsistent_text(18, 18), inconsistent_text(3, 1), inconsistent_text(2, 0, " left")
+    ('18 inconsistently oriented edges (all among the non-manifold ones)', \
+'3 inconsistently oriented edges (1 among the non-manifold ones)', '2 inconsistently oriented edges left')
+    """
+    text = counted(n, "inconsistently oriented edge") + left
+    if not nonmanifold:
+        return text
+    if n == 1:
+        return f"{text} (also non-manifold)"
+    return f"{text} ({'all' if nonmanifold == n else nonmanifold} among the non-manifold ones)"
+
+
 class Solid:
     """A triangle mesh made ready to voxelise: its edge census, its
     double-sided faces read as one, its orientation repaired where needed,
@@ -211,6 +243,7 @@ class Solid:
         self.double_sided = self.walls = self.flipped = self.chain_edges = self.repeated = 0
         self.t_junctions: dict | None = None  # facts of the edges split at T-junctions, if any closed
         self.inconsistent = self.defects["inconsistent_edges"]
+        self.inconsistent_nonmanifold = self.defects["inconsistent_nonmanifold_edges"]
         self.v = v
         self.faces = faces
         self.chain = (np.zeros(0, dtype=np.int64),) * 2
@@ -248,6 +281,7 @@ class Solid:
                 edges = census(faces, len(v))
                 self.census = defect_counts(*edges[2:])
         self.inconsistent = self.census["inconsistent_edges"]
+        self.inconsistent_nonmanifold = self.census["inconsistent_nonmanifold_edges"]
         if self.inconsistent:
             # a repeat uses each of its edges once more the same way: only
             # inconsistently oriented edges can come of one
@@ -255,7 +289,9 @@ class Solid:
             self.repeated = int((first != np.arange(len(faces))).sum())
             faces, self.flipped = orient_faces(v, faces, first)
             edges = census(faces, len(v))
-            self.inconsistent = defect_counts(*edges[2:])["inconsistent_edges"]
+            oriented = defect_counts(*edges[2:])
+            self.inconsistent = oriented["inconsistent_edges"]
+            self.inconsistent_nonmanifold = oriented["inconsistent_nonmanifold_edges"]
         a, b = chain_of(*edges[:4])
         self.chain = (a, b)
         self.chain_edges = int(len(a))
@@ -295,7 +331,7 @@ class Solid:
         if d["watertight"] and not self.double_sided:
             return None
         what = [", ".join([counted(d["boundary_edges"], "boundary edge"), counted(d["nonmanifold_edges"], "non-manifold edge"),
-                           counted(d["inconsistent_edges"], "inconsistently oriented edge")])]
+                           inconsistent_text(d["inconsistent_edges"], d["inconsistent_nonmanifold_edges"])])]
         if self.double_sided:
             what.append(counted(self.double_sided, "double-sided face") + " (coincident faces of opposite "
                         "orientation)")
@@ -396,8 +432,8 @@ class Solid:
                         "the mesh is open or non-manifold, only across edges where they meet almost flat or that "
                         "make half or more of the rim of a part)")
         if self.inconsistent:  # as the faces are read, after any turned over
-            what.append(counted(self.inconsistent, "inconsistently oriented edge")
-                        + (" left" if self.flipped else ""))
+            what.append(inconsistent_text(self.inconsistent, self.inconsistent_nonmanifold,
+                                          " left" if self.flipped else ""))
         if stats is not None and stats[0]:
             what.append(counted(int(stats[0]), "voxel") + " inside two or more layers (self-intersecting "
                         "or overlapping shells: counted once, the union)")

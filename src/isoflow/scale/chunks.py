@@ -522,12 +522,24 @@ def _level_names(node) -> list[str]:
 
 
 def axis_names(multiscale: dict, ndim: int, where: str) -> list[str]:
-    """The level's axis names; NGFF 0.1-0.2 had none and meant (t, c, z, y, x)."""
+    """The level's axis names; NGFF 0.1-0.2 had none and meant (t, c, z, y, x).
+
+    An axis whose ``type`` (NGFF 0.4 on) is ``"time"`` or ``"channel"`` is
+    named ``t`` or ``c`` whatever its name: NGFF lets a time axis be named
+    "time", and read by its name it was taken for channels.
+
+    Examples
+    --------
+    >>> axis_names({"axes": [{"name": "time", "type": "time"}, "z", "y", "x"]}, 4, "a.zarr")
+    ['t', 'z', 'y', 'x']
+    """
     axes = multiscale.get("axes")
     if axes is None:
         names = list("tczyx"[-ndim:]) if ndim <= 5 else []
     else:
-        names = [str(a.get("name")) if isinstance(a, dict) else str(a) for a in axes]
+        kinds = {"time": "t", "channel": "c"}
+        names = [kinds.get(str(a.get("type")).lower(), str(a.get("name"))) if isinstance(a, dict) else str(a)
+                 for a in axes]
     if len(names) != ndim:
         raise IsoflowError(f"{where}: OME-Zarr axes {names} do not fit a {ndim}D array")
     return [n.lower() for n in names]

@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from ...digital.lattice import DigitalObject
-from ...errors import IsoflowError
+from ...errors import IsoflowError, coordinates
 from .registry import RawVolume, check_shape, placement, reading, space_not_kept, unit_not_kept
 
 MAX_HEADER_LINES = 32
@@ -82,7 +82,7 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
         raise IsoflowError(f"{path}: binvox holds 3D voxels, this object is {obj.ndim}D")
     if np.ndim(obj.pitch):
         raise IsoflowError(f"{path}: binvox holds one voxel size and this object's pitch is "
-                           f"{np.round(obj.pitch, 9).tolist()}; write .nii.gz, .nrrd or .h5 to keep it")
+                           f"{coordinates(obj.spacing)}; write .nii.gz, .nrrd or .h5 to keep it")
     unit_not_kept(path, "binvox", unit)
     space_not_kept(path, "binvox", space)
 

@@ -22,7 +22,7 @@ import numpy as np
 
 from ...digital.frames import frame_text
 from ...digital.lattice import DigitalObject
-from ...errors import IsoflowError
+from ...errors import IsoflowError, coordinates
 from .registry import RawVolume, note, placement, reading
 
 MAX_SIDE = 256
@@ -109,8 +109,8 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
                             f"{'x'.join(map(str, obj.volume.shape))}")
     spacing, corner = placement(obj)
     if (spacing != 1).any() or corner.any() or unit is not None or space is not None:
-        note(f"{path}: MagicaVoxel keeps no voxel size or origin; pitch {np.round(obj.pitch, 9).tolist()} "
-             f"and origin {np.round(corner, 9).tolist()}{'' if unit is None else ' in ' + unit}"
+        note(f"{path}: MagicaVoxel keeps no voxel size or origin; pitch {coordinates(spacing)} "
+             f"and origin {coordinates(corner, step=spacing)}{'' if unit is None else ' in ' + unit}"
              f"{'' if space is None else ', ' + frame_text(space) + ','} are not written")
 
 

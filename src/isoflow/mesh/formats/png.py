@@ -33,7 +33,7 @@ import numpy as np
 
 from ...digital.frames import frame_text
 from ...digital.lattice import DigitalObject
-from ...errors import IsoflowError
+from ...errors import IsoflowError, coordinates
 from .registry import (
     LabelVolume,
     RawVolume,
@@ -121,8 +121,8 @@ def check(path: Path, obj: DigitalObject | LabelVolume, dataset: str | None = No
     refuse_empty(path, obj.volume.shape, "PNG")
     spacing, corner = placement(obj)
     # said where what is read back differs: a pixel size not 1, an origin not 0, a unit
-    lost = ([f"pitch {np.round(obj.pitch, 9).tolist()}"] if (spacing != 1).any() else []) + (
-        [f"origin {np.round(corner, 9).tolist()}"] if corner.any() else []) + (
+    lost = ([f"pitch {coordinates(spacing)}"] if (spacing != 1).any() else []) + (
+        [f"origin {coordinates(corner, step=spacing)}"] if corner.any() else []) + (
         [f"unit {unit}"] if unit is not None else []) + (
         [frame_text(space)] if space is not None else [])
     if lost:

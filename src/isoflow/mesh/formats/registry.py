@@ -682,8 +682,10 @@ def fourth_axis_words(path: str | os.PathLike, count: int | None = None) -> tupl
     """What the 4th axis of a 4D volume read as (x, y, z, t) holds, as a
     refusal says it, and what one entry of it is called: a time series
     where the file names the axis ``t`` (an OME-Zarr image's time axis, a
-    zarr array's dimension name, a TIFF's ``T``), channels where it names
-    it ``c``, else "time points or channels" (a .npy does not say which).
+    zarr array's dimension name, a TIFF's ``T``) or its format reserves
+    that axis for time (a NIfTI's or an Analyze header's ``dim[4]``),
+    channels where it names it ``c``, else "time points or channels" (a
+    .npy does not say which).
 
     Parameters
     ----------
@@ -704,6 +706,8 @@ def fourth_axis_words(path: str | os.PathLike, count: int | None = None) -> tupl
     ('a 4th axis of 3 entries, time points or channels', 'entry')
     >>> fourth_axis_words("cells.ome.tif", 3)
     ("a time series of 3 time points along its 4th axis 't'", 'time point')
+    >>> fourth_axis_words("bold.nii.gz", 3)
+    ("a time series of 3 time points along its 4th axis, NIfTI's dim[4]", 'time point')
     >>> fourth_axis_words("cells.npy")
     ('a 4th axis of time points or channels', 'entry')
     """
@@ -714,6 +718,11 @@ def fourth_axis_words(path: str | os.PathLike, count: int | None = None) -> tupl
     entries = "" if count is None else f"{count} "
     if name == "t":
         return f"a time series of {entries}time points along its 4th axis 't'", "time point"
+    fmt = format_for(path)
+    if fmt is not None and fmt.name in ("NIfTI", "Analyze"):
+        # both headers reserve dim[4] for time (other values, a vector's, go
+        # in dim[5], a 5D image the readers refuse): a time series
+        return f"a time series of {entries}time points along its 4th axis, {fmt.name}'s dim[4]", "time point"
     if name == "c":
         return f"{entries}channels along its 4th axis 'c'", "channel"
     if count is None:
