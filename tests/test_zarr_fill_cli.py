@@ -338,3 +338,32 @@ def test_a_block_of_several_labels_is_refused_without_reading_the_store_again(tm
     with pytest.raises(NotBinary) as refused:  # the first block holds 5 and 9
         omezarr.analyze_zarr(tmp_path / "l.zarr")
     assert refused.value.value is None and not looked
+
+
+def test_the_mask_search_stops_at_the_first_slab_holding_another_label():
+    """Where the refused block holds 0 and one label v, the store is read
+    for v alone (only_values), a slab of blocks at a time, stopping at the
+    first slab that holds another label: a label image of one label per
+    block (big grains) is refused after a few blocks, not a whole read."""
+    dask_array = pytest.importorskip("dask.array")
+    from isoflow.mesh.formats.omezarr import CHECKED_BLOCKS, only_values
+
+    class Counted:
+        """An array whose reads are counted, as a store's chunks are read."""
+
+        def __init__(self, values):
+            self.values, self.shape, self.dtype, self.ndim, self.reads = values, values.shape, values.dtype, 3, 0
+
+        def __getitem__(self, key):
+            self.reads += 1
+            return self.values[key]
+
+    grains = np.zeros((20, 8, 8), np.uint8)
+    grains[:, :4, :4] = 5
+    mask = Counted(grains.copy())
+    assert only_values(dask_array.from_array(mask, chunks=(1, 2, 2), asarray=False), 5)
+    assert mask.reads >= 20 * 4 * 4  # a mask: every block read (and a slice dask reads for its type)
+    grains[1, 6, 6] = 9  # another label in the first slabs
+    labels = Counted(grains)
+    assert not only_values(dask_array.from_array(labels, chunks=(1, 2, 2), asarray=False), 5)
+    assert labels.reads <= CHECKED_BLOCKS + 1 < 20 * 4 * 4

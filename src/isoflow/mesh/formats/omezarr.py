@@ -596,12 +596,39 @@ def one_value_of_store(store: StoreArray, refused: NotBinary | None = None) -> o
         value = np.asarray(refused.value, lazy.dtype)[()]
         if value == 1 or value == 0 or not np.isfinite(value):
             return None
-        return value if bool(((lazy == 0) | (lazy == value)).all().compute()) else None
+        return value if only_values(lazy, value) else None
     low, high = da.compute(lazy.min(), lazy.max())
     value = high if high != 0 else low
     if value == 1 or value == 0 or not np.isfinite(value) or (low != 0 and high != 0 and low != high):
         return None
     return value if bool(((lazy == 0) | (lazy == value)).all().compute()) else None
+
+
+#: blocks of a store checked at once by :func:`only_values` before it
+#: decides whether to read on
+CHECKED_BLOCKS = 64
+
+
+def only_values(lazy, value) -> bool:
+    """Whether every voxel of the dask array ``lazy`` is 0 or ``value``,
+    read a slab of blocks at a time (about :data:`CHECKED_BLOCKS`), and no
+    further than the first slab holding another value: a label image whose
+    blocks each hold one label shows a second label within a few blocks,
+    where one reduction over the store would read all of it.
+
+    Examples
+    --------
+    >>> import dask.array as da
+    >>> mask = np.zeros((6, 4, 4), np.uint8)
+    >>> mask[1:5, 1:3, 1:3] = 255
+    >>> only_values(da.from_array(mask, chunks=2), 255), only_values(da.from_array(mask * 0 + 7, chunks=2), 255)
+    (True, False)
+    """
+    per_block = ((lazy == 0) | (lazy == value)).map_blocks(
+        lambda block: np.array(block.all()).reshape((1,) * block.ndim), chunks=(1,) * lazy.ndim, dtype=bool)
+    across = max(1, int(np.prod(per_block.shape[1:])))
+    step = max(1, CHECKED_BLOCKS // across)
+    return all(bool(per_block[at:at + step].all().compute()) for at in range(0, per_block.shape[0], step))
 
 
 def analyze_value(store: StoreArray, value, connectivity: int | None, place: dict, **options: Any) -> Report:
