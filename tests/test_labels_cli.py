@@ -1179,6 +1179,17 @@ def test_a_mesh_given_for_a_label_image_is_named_a_mesh(capsys):
     assert "volumes end in" not in line
 
 
+def test_a_point_list_given_for_a_label_image_is_named_a_point_list(tmp_path, capsys):
+    # it said "not a volume file (volumes end in .npy, ...)", though info
+    # reads the same file as one object without --labels
+    (tmp_path / "p.txt").write_text("0 0 0\n1 0 0\n")
+    line = fails(capsys, "info", tmp_path / "p.txt", "--labels",
+                 words=("p.txt: a point list", "not a label image", "without --labels"))
+    assert "volumes end in" not in line
+    assert main(["info", str(tmp_path / "p.txt"), "--json"]) == 0  # what the line says reports it
+    assert json.loads(capsys.readouterr().out)["dimension"] == 3
+
+
 def test_write_labels_writes_a_2d_label_image_that_info_labels_reads(tmp_path):
     """write_labels took 3D only ("a label image is a 3D array"), though
     read_labels, label_table and ``info --labels`` take a 2D image (a cell

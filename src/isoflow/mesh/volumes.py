@@ -43,7 +43,6 @@ from .outputs import atomic_path, check_output_path, refuse_directory_spelling
 
 #: every volume suffix read_volume takes (see isoflow.mesh.formats.registry)
 VOLUME_SUFFIXES = volume_suffixes()
-POINT_SUFFIXES = (".txt", ".xyz", ".pts", ".csv")
 
 
 #: what ``os.stat`` says of a path that is not there
@@ -286,7 +285,8 @@ def _read_raw(path: str | os.PathLike, mesh: str | None = None, time: int | np.i
         A volume file, optionally ``:dataset``.
     mesh : str, optional
         What to say of a mesh file in place of "not a volume file" (a
-        reader whose remedy for a mesh differs).
+        reader whose remedy for a mesh differs: the label reader's, which
+        names a point list's too).
     time : int, optional
         The time point of a 4D volume to give, as 3D (see
         :func:`read_volume`).
@@ -310,6 +310,10 @@ def _read_raw(path: str | os.PathLike, mesh: str | None = None, time: int | np.i
 
         if mesh is not None and is_mesh_path(file):
             raise IsoflowError(f"{path}: {mesh}")
+        if mesh is not None and file.suffix.lower() in POINT_SUFFIXES:
+            # (a label reader's: one object's points hold no labels)
+            raise IsoflowError(f"{path}: a point list ({file.suffix} of x y z per line), one object, not a label "
+                               f"image: `isoflow info {path}` without --labels reports it (isoflow.read_points)")
         if file.is_dir():  # the line `info DIR` gives, with --labels too: a directory is not "not a volume file"
             _check_readable(file)
         refuse_inside_store(file, path)
