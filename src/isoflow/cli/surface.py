@@ -156,12 +156,12 @@ def input_stem(name: str) -> str:
 def checked_mesh(name: str, obj, conn: int):
     """The boundary mesh, refused up front when it would not fit in memory."""
     from ..digital.configurations import configuration_histogram
-    from ..digital.surface import boundary_faces, boundary_mesh, mesh_memory
+    from ..digital.surface import boundary_faces, boundary_mesh, mesh_memory, mesh_method
     from ..scale.memory import check_fits
 
     hist = configuration_histogram(obj.volume)
     check_fits(
-        mesh_memory(hist),
+        mesh_memory(hist, mesh_method(obj.volume)),  # the way boundary_mesh below takes
         f"{name}: the boundary mesh ({boundary_faces(hist):,} faces)",
         hint="crop or coarsen the volume",
     )

@@ -461,10 +461,17 @@ def _vertex_components(polygons: np.ndarray, nv: int) -> tuple[int, np.ndarray]:
 _CORNER_D = ((1, 1), (0, 1), (0, 0), (1, 0))
 
 
-#: Peak bytes of ``isoflow surface`` (mesh, components, PLY) per lattice
-#: vertex of the volume and per boundary face. Measured 13 and 220 on a
-#: 256^3 porous field (`/usr/bin/time -v isoflow surface`), rounded up.
-MESH_BYTES_PER_VERTEX = 16
+#: Peak bytes of ``isoflow surface`` (mesh, components, PLY, trimesh's
+#: read-back) above the memory in use when it is checked: a fixed part (the
+#: read-back's imports), per lattice vertex of the volume by the way the
+#: mesh is built (:func:`mesh_method`: the NumPy passes hold arrays the size
+#: of the lattice, whose numbering is int64 from 2^28 voxels on, the bit
+#: rows 1/8 byte a voxel) and per boundary face. Measured on balls, tori
+#: and porous fields of 256^3 to 660^3 (docs/surface.md, "Memory: the
+#: check before meshing"), rounded up.
+MESH_BYTES_FIXED = 128 << 20
+MESH_BYTES_PER_VERTEX = {"numpy": 16, "compiled": 2}
+MESH_BYTES_PER_VERTEX_INT64 = 24  # "numpy" from 2^28 lattice vertices on
 MESH_BYTES_PER_FACE = 300
 
 
@@ -482,9 +489,37 @@ def boundary_faces(hist: np.ndarray) -> int:
     return int(np.asarray(hist, np.int64) @ face_slots()) // 4
 
 
-def mesh_memory(hist: np.ndarray) -> int:
-    """Estimated peak bytes of meshing the volume whose histogram is ``hist``."""
-    return int(np.sum(hist)) * MESH_BYTES_PER_VERTEX + boundary_faces(hist) * MESH_BYTES_PER_FACE
+def mesh_memory(hist: np.ndarray, method: Literal["numpy", "compiled"] = "numpy") -> int:
+    """Estimated peak bytes of meshing the volume whose histogram is
+    ``hist``, writing the mesh and reading it back.
+
+    Parameters
+    ----------
+    hist : numpy.ndarray
+        The volume's configuration histogram (256 counts, one per lattice
+        vertex of the volume).
+    method : {"numpy", "compiled"}
+        How the mesh is built (:func:`mesh_method` of the volume); the
+        NumPy passes' estimate is the larger one.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> from isoflow.digital.configurations import configuration_histogram
+    >>> hist = configuration_histogram(np.ones((100, 100, 100), bool))
+    >>> mesh_memory(hist, "compiled") < mesh_memory(hist, "numpy")
+    True
+    """
+    if method not in MESH_BYTES_PER_VERTEX:
+        raise IsoflowError(f"mesh_memory: method must be 'numpy' or 'compiled', got {method!r}")
+    lattice = int(np.sum(hist))
+    per_vertex = MESH_BYTES_PER_VERTEX[method]
+    if method == "numpy" and lattice > 2**28:  # (the lattice outnumbers the voxels: this errs on the safe side)
+        per_vertex = MESH_BYTES_PER_VERTEX_INT64
+    return MESH_BYTES_FIXED + lattice * per_vertex + boundary_faces(hist) * MESH_BYTES_PER_FACE
 
 
 def _empty_mesh(connectivity: int) -> QuadMesh:

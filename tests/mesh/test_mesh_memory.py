@@ -1,0 +1,103 @@
+"""The memory that ``isoflow surface`` estimates before meshing, against
+the peak the command itself reaches, run as a user runs it."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import trimesh
+from conftest import ball, torus
+from scipy.ndimage import gaussian_filter
+
+from isoflow.digital.configurations import configuration_histogram
+from isoflow.digital.surface import mesh_memory, mesh_method
+
+pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="ru_maxrss is in KiB on Linux")
+
+# the peak of one child, measured by a parent that runs nothing else
+_PEAK = ("import resource, subprocess, sys; r = subprocess.run(sys.argv[1:], capture_output=True, text=True); "
+         "print(r.returncode, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss); print(r.stderr)")
+
+
+def peak_bytes(tmp_path, volume: np.ndarray, *options: str) -> int:
+    """Peak resident bytes of ``isoflow surface`` on ``volume``, with its read-back."""
+    np.save(tmp_path / "v.npy", volume)
+    run = subprocess.run([sys.executable, "-c", _PEAK, sys.executable, "-m", "isoflow", "surface", str(tmp_path / "v.npy"),
+                          "-o", str(tmp_path / "v.ply"), "--force", *options], capture_output=True, text=True)
+    code, kib = run.stdout.split("\n", 1)[0].split()
+    assert code == "0", run.stdout
+    return int(kib) * 1024
+
+
+def porous(n: int) -> np.ndarray:
+    # the worst case per voxel: a boundary face at almost every other voxel
+    return gaussian_filter(np.random.default_rng(7).standard_normal((n, n, n)), 2.0) > 0
+
+
+@pytest.mark.parametrize("shape", ["porous", "ball", "torus"])
+def test_estimate_covers_the_commands_peak(tmp_path, shape):
+    # what the budget is checked against is the memory available with the
+    # volume loaded: the estimate must cover the rest of the command's
+    # peak, meshing, writing and reading back with trimesh, with room. The
+    # memory in use at the check is that of the same command on one voxel
+    # of the same shape (same input, numba loaded), without its read-back.
+    n = 192
+    volume = {"porous": porous(n), "ball": ball(64, n), "torus": torus(48, 20, n)}[shape]
+    assert mesh_method(volume) == "compiled"
+    one = np.zeros_like(volume)
+    one[n // 2, n // 2, n // 2] = True
+    grown = peak_bytes(tmp_path, volume) - peak_bytes(tmp_path, one, "--no-check")
+    estimate = mesh_memory(configuration_histogram(volume), "compiled")
+    assert estimate >= 1.1 * grown, (estimate, grown)
+    # the NumPy passes hold arrays the size of the lattice: theirs is larger
+    assert mesh_memory(configuration_histogram(volume), "numpy") > estimate
+
+
+def test_estimate_of_a_ball_is_near_its_peak(tmp_path, monkeypatch):
+    # a 600^3 ball was estimated at 3.4 GiB for a peak of 673 MB (16 bytes
+    # per lattice vertex, the NumPy passes' arrays, that the bit rows do
+    # not make): a job with 2 GB was refused work that fits. The estimate
+    # is the one the command checks against the budget.
+    from isoflow.cli.surface import checked_mesh
+    from isoflow.digital.lattice import DigitalObject
+    from isoflow.scale import memory
+
+    volume = ball(128, 384)
+    needs: list[int] = []
+    monkeypatch.setattr(memory, "check_fits", lambda need, *args, **kwargs: needs.append(need))
+    checked_mesh("ball.npy", DigitalObject(volume), 6)
+    assert needs and needs[0] <= 1.5 * peak_bytes(tmp_path, volume)
+
+
+def test_refusal_under_the_budget(tmp_path, capsys, monkeypatch):
+    # a budget between the two paths' estimates: the bit rows go ahead, and
+    # the refusal is the one line it was, with nothing written
+    from isoflow.cli import main
+    from isoflow.scale import memory
+
+    volume = ball(64, 192)
+    hist = configuration_histogram(volume)
+    np.save(tmp_path / "v.npy", volume)
+    monkeypatch.setattr(memory, "default_budget", lambda: (mesh_memory(hist, "compiled") + mesh_memory(hist, "numpy")) // 2)
+    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "a.ply"), "--no-check"]) == 0
+    monkeypatch.setattr(memory, "default_budget", lambda: mesh_memory(hist, "compiled") - 1)
+    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "b.ply")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    faces = len(trimesh.load(tmp_path / "a.ply", process=False).faces) // 2  # two triangles a square
+    assert len(err) == 1 and f"the boundary mesh ({faces:,} faces) needs about" in err[0], err
+    assert "more than the budget of" in err[0] and err[0].endswith("; crop or coarsen the volume")
+    assert not (tmp_path / "b.ply").exists()
+
+
+def test_numpy_estimate_from_int64_numbering():
+    # from 2^28 voxels on the NumPy passes number the lattice in int64: a
+    # 660^3 ball meshed with them peaked 6.07 GB above the check, 20 bytes
+    # per lattice vertex beside its 912,528 faces (docs/surface.md), where
+    # 16 bytes a vertex gave 5.03 GB
+    hist = np.zeros(256, np.int64)
+    hist[0] = 661**3
+    assert mesh_memory(hist, "numpy") >= 1.1 * 20 * 661**3
+    assert mesh_memory(hist, "compiled") < mesh_memory(hist, "numpy")
