@@ -4,7 +4,9 @@ A job that runs out of memory on Linux is usually killed without a word (or
 makes the machine swap for minutes); a clear error up front is better. Every
 guarded job estimates its peak from numbers it knows cheaply (grid size, the
 configuration histogram) and compares it with a budget: 90 % of the memory
-the kernel says is available when the job starts.
+the kernel says is available when the job starts, or of the room a
+container's or batch job's memory limit (its control group) leaves, where
+that is less.
 """
 
 from __future__ import annotations
@@ -58,7 +60,13 @@ def default_budget() -> int:
 
 def meminfo_available() -> int | None:
     """The machine's MemAvailable in bytes (free plus reclaimable cache),
-    None where ``/proc/meminfo`` cannot be read."""
+    None where ``/proc/meminfo`` cannot be read.
+
+    Examples
+    --------
+    >>> meminfo_available() > 0
+    True
+    """
     try:
         with open(MEMINFO) as fh:
             for line in fh:
@@ -80,6 +88,12 @@ def cgroup_room() -> int | None:
     Returns
     -------
     int or None
+
+    Examples
+    --------
+    >>> room = cgroup_room()  # None where no group sets a limit (a machine of one's own)
+    >>> room is None or default_budget() <= room
+    True
     """
     try:
         lines = (PROC_SELF / "cgroup").read_text().splitlines()
