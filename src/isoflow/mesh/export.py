@@ -100,12 +100,14 @@ def float32_holds(xyz: np.ndarray, spacing) -> bool:
     return bool(float32_held(xyz, spacing).all())
 
 
-def float32_held(xyz: np.ndarray, spacing) -> np.ndarray:
+def float32_held(xyz: np.ndarray, spacing, stored: np.ndarray | None = None) -> np.ndarray:
     """Per coordinate of ``xyz``, whether float32 holds it to
-    :data:`POSITION_TOLERANCE` voxels (of size ``spacing`` per axis)."""
+    :data:`POSITION_TOLERANCE` voxels (of size ``spacing`` per axis);
+    ``stored``: the float32 cast of ``xyz`` where the caller has made it
+    (the one a file keeps), else it is made here."""
     xyz = np.asarray(xyz, np.float64)
     with np.errstate(over="ignore", invalid="ignore"):
-        error = np.abs(xyz.astype(np.float32).astype(np.float64) - xyz)
+        error = np.abs((xyz.astype(np.float32) if stored is None else stored).astype(np.float64) - xyz)
     return np.asarray(error <= POSITION_TOLERANCE * np.asarray(spacing, np.float64))
 
 
@@ -653,10 +655,9 @@ def batch_glb_parts(batch: Batch, names: list[str], offsets: np.ndarray, spacing
     xyz = origin + spacing * (np.asarray(mesh.vertices, float) + corner[of_vertex])  # as DigitalObject.world
     # a part past float32's range casts to inf here, and is framed below:
     # its positions replaced by voxel units, not a NumPy warning on the terminal
-    with np.errstate(over="ignore", invalid="ignore"):
+    with np.errstate(over="ignore"):
         positions = xyz.astype(np.float32)
-        # as float32_held, on the one cast the file keeps
-        held = (np.abs(positions - xyz) <= POSITION_TOLERANCE * spacing).all(axis=1)
+    held = float32_held(xyz, spacing, positions).all(axis=1)
     holds = np.logical_and.reduceat(held, batch.vfirst[:-1]) if len(xyz) else np.ones(parts, bool)
     table = curvature_columns(mesh)
     framed = np.flatnonzero(~holds)
