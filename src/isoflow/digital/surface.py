@@ -422,13 +422,9 @@ def triangle_rows(faces: np.ndarray, edge_midpoint: np.ndarray) -> tuple[np.ndar
     # every array written once, in place: fresh pages cost more than the copies
     triangles = np.empty((2 * plain + sum(len(f) for f, _ in fans), 3), faces.dtype)
     face = np.empty(len(triangles), np.int64)
-    if len(split):
-        kept = np.ones(len(faces), bool)
-        kept[split] = False
-        kept = np.flatnonzero(kept)
-        quads = np.take(faces, kept, axis=0)  # (rows by index: a boolean row mask reads slower)
-    else:
-        kept, quads = np.arange(len(faces)), faces
+    kept = np.delete(np.arange(len(faces)), split)  # the plain quads' rows
+    # (rows by index: a boolean row mask reads slower)
+    quads = np.take(faces, kept, axis=0) if len(split) else faces
     # (0, 1, 2) and (0, 2, 3) of each quad ("clip": the columns are in range, and it writes unbuffered)
     np.take(quads, [0, 1, 2, 0, 2, 3], axis=1, out=triangles[:2 * plain].reshape(plain, 6), mode="clip")
     face[:2 * plain].reshape(plain, 2)[:] = kept[:, None]
