@@ -546,10 +546,11 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | np.integer | None 
     return analyze_value(store, value, connectivity, place, **options)
 
 
-def one_value_of_store(store: StoreArray, refused: NotBinary | None = None) -> object | None:
+def one_value_of_store(store: StoreArray, refused: NotBinary) -> object | None:
     """The value ``v`` of a store whose only value other than 0 is one
-    ``v`` other than 1 (a mask written 0/255), found in passes over the
-    store; None where it holds another value too (a label image).
+    ``v`` other than 1 (a mask written 0/255), found from the block a
+    reader refused and a pass over the store (:func:`only_values`); None
+    where it holds another value too (a label image).
 
     :func:`isoflow.read_volume` reads such an array as the mask of ``v``
     (:func:`~isoflow.mesh.volumes.one_value_mask`), and so do the readers
@@ -561,7 +562,7 @@ def one_value_of_store(store: StoreArray, refused: NotBinary | None = None) -> o
     ----------
     store : StoreArray
         The store, as :func:`open_store` opens it.
-    refused : NotBinary, optional
+    refused : NotBinary
         The refusal of the block read: where that block holds more than one
         value other than 0 (its ``value`` is None) the store is no mask and
         is not read again; where it holds one, only that value is looked
@@ -578,30 +579,21 @@ def one_value_of_store(store: StoreArray, refused: NotBinary | None = None) -> o
     >>> path = Path(tempfile.mkdtemp()) / "m.zarr"
     >>> z = zarr.create_array(str(path), shape=(4, 4, 4), chunks=(2, 2, 2), dtype="u1")
     >>> z[1:3, 1:3, 1:3] = 255
-    >>> one_value_of_store(open_store(path))
+    >>> one_value_of_store(open_store(path), NotBinary("m.zarr: not a binary volume", value=255))
     np.uint8(255)
     >>> z[0, 0, 0] = 7
-    >>> one_value_of_store(open_store(path)) is None
+    >>> one_value_of_store(open_store(path), NotBinary("m.zarr: not a binary volume", value=255)) is None
     True
     """
-    from ...scale.chunks import import_dask
-
-    if refused is not None and refused.value is None:  # (the block read holds several labels: no store read)
+    if refused.value is None:  # (the block read holds several labels: no store read)
         return None
-    _, da = import_dask()
     lazy = store.lazy()
     if lazy.dtype.kind not in "iuf" or not lazy.size:
         return None
-    if refused is not None:
-        value = np.asarray(refused.value, lazy.dtype)[()]
-        if value == 1 or value == 0 or not np.isfinite(value):
-            return None
-        return value if only_values(lazy, value) else None
-    low, high = da.compute(lazy.min(), lazy.max())
-    value = high if high != 0 else low
-    if value == 1 or value == 0 or not np.isfinite(value) or (low != 0 and high != 0 and low != high):
+    value = np.asarray(refused.value, lazy.dtype)[()]
+    if value == 1 or value == 0 or not np.isfinite(value):
         return None
-    return value if bool(((lazy == 0) | (lazy == value)).all().compute()) else None
+    return value if only_values(lazy, value) else None
 
 
 #: blocks of a store checked at once by :func:`only_values` before it
