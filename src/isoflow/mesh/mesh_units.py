@@ -76,17 +76,19 @@ def gltf_generator(path: Path) -> str | None:
     True
     """
     import json
-    import struct
+
+    from .glb_geometry import GLB_HEAD
 
     try:
         with open(path, "rb") as fh:
-            head = fh.read(20)
-            if head[:4] == b"glTF" and len(head) == 20 and head[16:20] == b"JSON":
-                tree = json.loads(fh.read(struct.unpack("<I", head[12:16])[0]))
-            else:
+            head = fh.read(GLB_HEAD.size)
+            if len(head) == GLB_HEAD.size and head[:4] == b"glTF":  # binary: the JSON chunk first
+                _, _, _, json_length, kind = GLB_HEAD.unpack(head)
+                tree = json.loads(fh.read(json_length)) if kind == b"JSON" else {}
+            else:  # a .gltf: the file is the JSON
                 tree = json.loads(head + fh.read())
         generator = tree["asset"].get("generator")
-    except (OSError, ValueError, KeyError, TypeError, AttributeError, struct.error):
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
         return None
     return generator if isinstance(generator, str) else None
 
