@@ -360,7 +360,7 @@ def _overlap_words(components: int, crossing: int, shared: int, solid_genus: int
     crosses = counted(crossing, "face") + (" crosses" if crossing == 1 else " cross")
     said = (f"the mesh's {components} components overlap or touch ({crosses} other components, "
             f"{counted(shared, 'vertex', 'vertices')} shared{'; ' + touch if touch else ''})")
-    if approximate:  # (solid.approximate): the nonzero rule's solid was not built; say what stands in for it
+    if approximate:  # (solid.approximate): no nonzero-rule solid to name; say what stands in for it
         return (f"{said}, some facing opposite ways (inside-out) or too many to follow: the solid they bound by the "
                 f"nonzero rule is not built; the outward components less the inside-out ones stand in for it, {union}; "
                 "where surfaces facing opposite ways cross, the solid's parts touch along the crossing curves, which "
