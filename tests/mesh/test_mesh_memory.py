@@ -13,7 +13,8 @@ from conftest import ball, torus
 from scipy.ndimage import gaussian_filter
 
 from isoflow.digital.configurations import configuration_histogram
-from isoflow.digital.surface import mesh_memory, mesh_method
+from isoflow.digital.surface import boundary_mesh, mesh_memory, mesh_method
+from isoflow.mesh.readback import readback_memory
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="ru_maxrss is in KiB on Linux")
 
@@ -50,8 +51,9 @@ def test_estimate_covers_the_commands_peak(tmp_path, shape):
     one = np.zeros_like(volume)
     one[n // 2, n // 2, n // 2] = True
     grown = peak_bytes(tmp_path, volume) - peak_bytes(tmp_path, one, "--no-check")
+    # the mesh's estimate and the read-back's (its imports among them), each checked when its work comes
     estimate = mesh_memory(configuration_histogram(volume), "compiled")
-    assert estimate >= 1.1 * grown, (estimate, grown)
+    assert estimate + readback_memory(boundary_mesh(volume), ".ply") >= 1.1 * grown, (estimate, grown)
     # the NumPy passes hold arrays the size of the lattice: theirs is larger
     assert mesh_memory(configuration_histogram(volume), "numpy") > estimate
 
@@ -101,3 +103,43 @@ def test_numpy_estimate_from_int64_numbering():
     hist[0] = 661**3
     assert mesh_memory(hist, "numpy") >= 1.1 * 20 * 661**3
     assert mesh_memory(hist, "compiled") < mesh_memory(hist, "numpy")
+
+
+# a budget of ``available`` bytes (MemAvailable, no control group) for
+# ``python -m isoflow ARGS``, run as a user runs it
+_BUDGETED = ("import runpy, sys; from pathlib import Path; from isoflow.scale import memory\n"
+             "d, available = Path(sys.argv[1]), int(sys.argv[2]); (d / 'proc').mkdir(exist_ok=True)\n"
+             "(d / 'proc' / 'cgroup').write_text(''); (d / 'meminfo').write_text(f'MemAvailable: {available // 1024} kB')\n"
+             "memory.PROC_SELF, memory.MEMINFO = d / 'proc', d / 'meminfo'\n"
+             "sys.argv = ['isoflow', *sys.argv[3:]]; runpy.run_module('isoflow', run_name='__main__')")
+
+
+def surface_within(tmp_path, available: int, *args: str) -> tuple[int, list[str]]:
+    """``isoflow surface`` with a budget of 90 % of ``available``: its exit
+    code and its stderr lines (less numba's note of a first compile)."""
+    run = subprocess.run([sys.executable, "-c", _BUDGETED, str(tmp_path), str(available), "surface", *args],
+                         capture_output=True, text=True)
+    return run.returncode, [line for line in run.stderr.splitlines() if "numba is compiling" not in line]
+
+
+def test_a_budget_for_the_mesh_but_not_the_read_back_writes_the_mesh(tmp_path):
+    # the read-back's imports (128 MiB) were charged to the mesh: a budget
+    # of 57.6 MiB refused a mesh of 1.0 MiB outright, --no-check too. The
+    # mesh is written, and the check alone skipped, said in one note; a
+    # budget for neither refuses the command in one line, writing nothing
+    volume = ball(10, 30)
+    np.save(tmp_path / "v.npy", volume)
+    for options in ((), ("--no-check",)):
+        out = tmp_path / "v.ply"
+        code, err = surface_within(tmp_path, 64 << 20, str(tmp_path / "v.npy"), "-o", str(out), "--force", *options)
+        assert code == 0, err
+        read = trimesh.load(out, process=False)
+        assert read.is_watertight and read.volume == pytest.approx(volume.sum())
+        if options:
+            assert err == []
+        else:
+            assert len(err) == 1 and err[0].startswith(f"isoflow surface: note: {out}: not read back"), err
+            assert "more than the budget of 57.6 MiB" in err[0]
+    code, err = surface_within(tmp_path, 64 << 10, str(tmp_path / "v.npy"), "-o", str(tmp_path / "w.ply"))
+    assert code == 2 and len(err) == 1 and "the boundary mesh" in err[0] and "more than the budget" in err[0], err
+    assert not (tmp_path / "w.ply").exists()

@@ -457,15 +457,15 @@ def _vertex_components(polygons: np.ndarray, nv: int) -> tuple[int, np.ndarray]:
 _CORNER_D = ((1, 1), (0, 1), (0, 0), (1, 0))
 
 
-#: Peak bytes of ``isoflow surface`` (mesh, components, PLY, trimesh's
-#: read-back) above the memory in use when it is checked: a fixed part (the
-#: read-back's imports), per lattice vertex of the volume by the way the
-#: mesh is built (:func:`mesh_method`: the NumPy passes hold arrays the size
-#: of the lattice, whose numbering is int64 from 2^28 voxels on, the bit
-#: rows 1/8 byte a voxel) and per boundary face. Measured on balls, tori
-#: and porous fields of 256^3 to 660^3 (docs/surface.md, "Memory: the
-#: check before meshing"), rounded up.
-MESH_BYTES_FIXED = 128 << 20
+#: Peak bytes of ``isoflow surface`` (mesh, components, PLY) above the
+#: memory in use when it is checked: per lattice vertex of the volume by the
+#: way the mesh is built (:func:`mesh_method`: the NumPy passes hold arrays
+#: the size of the lattice, whose numbering is int64 from 2^28 voxels on,
+#: the bit rows 1/8 byte a voxel) and per boundary face. Measured on balls,
+#: tori and porous fields of 256^3 to 660^3 (docs/surface.md, "Memory: the
+#: check before meshing"), rounded up. The read-back's imports are the
+#: read-back's own estimate (:func:`isoflow.mesh.readback.readback_memory`),
+#: checked when it comes: a budget too small for them skips the check alone.
 MESH_BYTES_PER_VERTEX = {"numpy": 16, "compiled": 2}
 MESH_BYTES_PER_VERTEX_INT64 = 24  # "numpy" from 2^28 lattice vertices on
 MESH_BYTES_PER_FACE = 300
@@ -487,7 +487,8 @@ def boundary_faces(hist: np.ndarray) -> int:
 
 def mesh_memory(hist: np.ndarray, method: Literal["numpy", "compiled"] = "numpy") -> int:
     """Estimated peak bytes of meshing the volume whose histogram is
-    ``hist``, writing the mesh and reading it back.
+    ``hist`` and writing the mesh (reading it back is estimated on its own,
+    as a run with ``--no-check`` skips it).
 
     Parameters
     ----------
@@ -515,7 +516,7 @@ def mesh_memory(hist: np.ndarray, method: Literal["numpy", "compiled"] = "numpy"
     per_vertex = MESH_BYTES_PER_VERTEX[method]
     if method == "numpy" and lattice > 2**28:  # (the lattice outnumbers the voxels: this errs on the safe side)
         per_vertex = MESH_BYTES_PER_VERTEX_INT64
-    return MESH_BYTES_FIXED + lattice * per_vertex + boundary_faces(hist) * MESH_BYTES_PER_FACE
+    return lattice * per_vertex + boundary_faces(hist) * MESH_BYTES_PER_FACE
 
 
 def _empty_mesh(connectivity: int) -> QuadMesh:

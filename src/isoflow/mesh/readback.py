@@ -146,20 +146,23 @@ def agreed_volume_words(read_units: float, voxels: int, spacing) -> str:
     return counted if read == counted else f"{counted} (read within the move of the corners)"
 
 
-#: peak bytes of the read-back per triangle, by suffix (measured on 4.9
-#: million triangles: 107 for a PLY, 182 for a welded STL; on 850,000: 295
-#: for an OBJ, whose text is read as arrays of its bytes; rounded up), and
-#: for the others
+#: peak bytes of the read-back: a fixed part (trimesh's and its readers'
+#: imports, which a run without the read-back never loads; docs/surface.md,
+#: "Memory: the check before meshing"), and per triangle, by suffix
+#: (measured on 4.9 million triangles: 107 for a PLY, 182 for a welded STL;
+#: on 850,000: 295 for an OBJ, whose text is read as arrays of its bytes;
+#: rounded up), and for the others
+READBACK_BYTES_FIXED = 128 << 20
 READBACK_BYTES_PER_TRIANGLE = {".ply": 150, ".stl": 250, ".obj": 350}
 READBACK_BYTES_OTHER = 350
 
 
 def readback_memory(mesh, suffix: str = "") -> int:
     """Estimated peak bytes of reading the mesh's file (of ``suffix``)
-    back with trimesh: two triangles per quad and one more per edge
-    midpoint of a face."""
+    back with trimesh: the imports, and per triangle (two per quad and one
+    more per edge midpoint of a face)."""
     triangles = 2 * len(mesh.faces) + int(np.count_nonzero(mesh.edge_midpoint >= 0))
-    return triangles * READBACK_BYTES_PER_TRIANGLE.get(suffix.lower(), READBACK_BYTES_OTHER)
+    return READBACK_BYTES_FIXED + triangles * READBACK_BYTES_PER_TRIANGLE.get(suffix.lower(), READBACK_BYTES_OTHER)
 
 
 def isoflow_figures(mesh, obj, components: list | None = None) -> dict:
