@@ -139,3 +139,25 @@ def test_info_of_a_3mf_says_its_pitch_and_origin_in_its_unit(tmp_path):
     grid = next(line for line in done.stdout.splitlines() if line.lstrip().startswith("voxelised"))
     assert "pitch 0.5 in," in grid and grid.endswith("] in")
     assert "volume                 24 in^3" in done.stdout  # 2 x 3 x 4 inches
+
+
+def test_meshes_voxelised_into_labels_give_their_unit_to_the_file_and_the_result(tmp_path, monkeypatch):
+    """Two 3MF parts in microns: the label image's NIfTI header says
+    microns (nibabel), and so does ``voxelize_meshes``'s result, which had
+    no unit. Each model's unit is read once (it was read twice, by the
+    command for the file and by the bodies for the refusal of mixed
+    units)."""
+    import isoflow as iso
+    from isoflow.mesh import mesh_units
+
+    parts = [box_3mf(tmp_path / f"{name}.3mf", "micron") for name in ("a", "b")]
+    assert {trimesh.load(p).units for p in parts} == {"micron"}
+    done = isoflow("voxelize", *parts, "--pitch", "0.5", "-o", tmp_path / "labels.nii.gz")
+    assert done.returncode == 0, done.stderr
+    assert nib.load(tmp_path / "labels.nii.gz").header.get_xyzt_units()[0] == "micron"
+    read = []
+    real = mesh_units.threemf_unit
+    monkeypatch.setattr(mesh_units, "threemf_unit", lambda path: read.append(path) or real(path))
+    r = iso.voxelize_meshes(parts, pitch=0.5)
+    assert r.unit == "µm" and r.to_dict()["unit"] == "µm" and sorted(read) == sorted(parts)
+    assert iso.voxelize_meshes([parts[0], trimesh.creation.box((2, 3, 4))], pitch=0.5).unit is None

@@ -103,7 +103,6 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     """Several meshes (or one split into bodies) into one label image."""
     from ..mesh.bodies import mesh_bodies
     from ..mesh.label_voxels import voxelize_meshes
-    from ..mesh.mesh_units import meshes_unit
     from ..mesh.volumes import (
         check_volume_output,
         keeps_names,
@@ -114,8 +113,7 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     )
 
     check_volume_output(args.output, args.force, ndim=3)  # suffix, library and path before the meshes are read
-    # the unit where every mesh declares it; meshes declaring different units are refused before they are read
-    unit = meshes_unit(args.mesh)
+    # each file's unit read once, carried by its bodies to the result; different units refused before the meshes
     bodies = mesh_bodies(args.mesh, args.split)
     # and the labels the format keeps, before the voxels
     refuse_label_count(args.output, len(bodies))
@@ -131,7 +129,7 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     kept = keeps_names(args.output)
     with coarser_for_magicavoxel(), writing_line(args, args.output):
         out = written(write_labels(r.labels, args.output, pitch=r.pitch, origin=r.origin, force=args.force,
-                                   names=r.names if kept else None, unit=unit), args.output)
+                                   names=r.names if kept else None, unit=r.unit), args.output)
     say_note(args, out, r.note, why=0 in r.voxels)  # (it names the labels that got no voxel)
     if not kept:
         say_note(args, out, names_not_kept(args.output, len(r.names)))

@@ -47,6 +47,7 @@ meshes joined, as every command reads it). With ``split``:
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import re
 from dataclasses import dataclass
@@ -69,7 +70,7 @@ from .load import (
     trimesh_load,
     weld,
 )
-from .mesh_units import meshes_unit
+from .mesh_units import common_unit, declared_units
 
 #: suffixes whose files are scenes of named nodes (split per node)
 SCENE_SUFFIXES = (".glb", ".gltf", ".3mf", ".dae", ".zae", ".3dxml", ".xaml", ".zip", ".tar.gz", ".tar.bz2", ".bz2")
@@ -78,12 +79,15 @@ SCENE_SUFFIXES = (".glb", ".gltf", ".3mf", ".dae", ".zae", ".3dxml", ".xaml", ".
 @dataclass(frozen=True)
 class Body:
     """One mesh of a label image: its name (file, file:node, file:solid,
-    file:k, or mesh k for arrays) and its triangles (welded when read from
-    a file)."""
+    file:k, or mesh k for arrays), its triangles (welded when read from
+    a file) and the length unit its file declares
+    (:func:`~isoflow.mesh.mesh_units.declared_unit`; None for arrays and
+    formats that hold none)."""
 
     name: str
     vertices: np.ndarray
     faces: np.ndarray
+    unit: str | None = None
 
 
 def is_scene_path(path) -> bool:
@@ -97,20 +101,26 @@ def mesh_bodies(meshes, split: bool = False) -> list[Body]:
     ``(vertices, faces)`` pair or an object with ``vertices`` and ``faces``
     (a ``trimesh.Trimesh``); with ``split``, each one's bodies (see the
     module docstring). Files are welded as :func:`load_mesh` welds them;
-    arrays and a :class:`Body` are taken as they are. IsoflowError for an
-    empty list or a bad mesh."""
+    arrays and a :class:`Body` are taken as they are. A file's bodies carry
+    the unit it declares (the grid's is
+    :func:`~isoflow.mesh.mesh_units.common_unit` of theirs). IsoflowError
+    for an empty list, a bad mesh, or files declaring different units."""
     if isinstance(meshes, (str, os.PathLike)) or hasattr(meshes, "faces") or is_scene(meshes):
         meshes = [meshes]  # one file or one mesh given alone
     if is_bare_pair(meshes):  # read as two meshes its vertices and its faces would be refused as neither
         raise IsoflowError("voxelize: meshes is one (vertices, faces) pair, not a list of meshes: "
                            "pass [(vertices, faces)]")
-    meshes_unit(meshes)  # one grid places them by their numbers: files declaring different units are refused
+    # each file's unit read once, and carried by its bodies (a body read already carries its own): one grid
+    # places them by their numbers, so meshes declaring different units are refused before any is read
+    units = [m.unit if isinstance(m, Body) else u for m, u in zip(meshes, declared_units(meshes))]
+    common_unit([m.name if isinstance(m, Body) else os.fspath(m) if isinstance(m, (str, os.PathLike)) else ""
+                 for m in meshes], units)
     bodies: list[Body] = []
-    for n, mesh in enumerate(meshes, 1):
+    for n, (mesh, unit) in enumerate(zip(meshes, units), 1):
         if isinstance(mesh, Body):  # read already
             bodies.append(mesh)
         elif isinstance(mesh, (str, os.PathLike)):
-            bodies += file_bodies(mesh, split)
+            bodies += [dataclasses.replace(b, unit=unit) for b in file_bodies(mesh, split)]
         elif split and is_scene(mesh):
             bodies += scene_bodies(mesh, f"mesh {n}")
         else:

@@ -43,6 +43,7 @@ from .bodies import Body, mesh_bodies
 from .fills import Fill, check_fill, check_strict
 from .grid import GridTooLarge, check_placement, finest_fit, grid_fits, grid_need, grid_words, voxel_grid
 from .load import mesh_bbox
+from .mesh_units import common_unit
 from .voxelize import PROGRESS_UNITS, check_write_bytes, tell_rule, voxelize
 
 #: how the voxels inside two or more meshes are labelled
@@ -87,6 +88,11 @@ class LabelVoxelization(Result):
         Each mesh's own note (:class:`~isoflow.mesh.fills.Voxelization`).
     note : str or None
         One line on the overlaps and on labels left without a voxel.
+    unit : str or None
+        The length unit of the origin and pitch: the one every mesh file
+        declares (:func:`~isoflow.mesh.mesh_units.declared_unit`: a 3MF
+        model's, a glTF's metres), as a single mesh's ``DigitalObject.unit``
+        is; None where any mesh holds bare numbers.
     """
 
     labels: np.ndarray | None = field(repr=False)
@@ -100,6 +106,7 @@ class LabelVoxelization(Result):
     overlaps: tuple[tuple[int, int, int], ...]
     notes: tuple[str | None, ...]
     note: str | None = None
+    unit: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """Every field but the label array, as JSON takes it."""
@@ -354,8 +361,9 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     Returns
     -------
     LabelVoxelization
-        The label array with its origin and pitch, the labels' names and
-        voxels, the overlaps, each mesh's note and one note of its own.
+        The label array with its origin and pitch (in ``unit``, the one
+        the mesh files declare), the labels' names and voxels, the
+        overlaps, each mesh's note and one note of its own.
 
     Raises
     ------
@@ -416,7 +424,8 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
         labels=labels, origin=np.asarray(origin, dtype=np.float64), pitch=float(pitch), names=names,
         voxels=tuple(int(c) for c in voxels[1:]), fill=fill, overlap=overlap,
         overlap_voxels=int(np.bitwise_count(shared).sum(dtype=np.int64)),
-        overlaps=tuple((i, j, c) for (i, j), c in sorted(pairs.items())), notes=tuple(notes))
+        overlaps=tuple((i, j, c) for (i, j), c in sorted(pairs.items())), notes=tuple(notes),
+        unit=common_unit([b.name for b in bodies], [b.unit for b in bodies]))
     if overlap == "error" and result.overlaps:
         # nothing is written or listed: the line says which mesh each label it names is
         shown = sorted({k for i, j, _ in result.overlaps[:NAMED_PAIRS] for k in (i, j)})

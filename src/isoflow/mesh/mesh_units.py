@@ -127,16 +127,40 @@ def model_part(package: zipfile.ZipFile) -> str | None:
     return models[0] if len(models) == 1 else None
 
 
-def meshes_unit(meshes) -> str | None:
-    """The length unit of several meshes laid on one grid: the unit every
-    mesh file declares where all declare the same, None where any holds
-    bare numbers (an array, an STL); meshes whose files declare different
-    units are refused, as one grid places them all by their numbers.
+def declared_units(meshes) -> list[str | None]:
+    """Each mesh's declared unit (:func:`declared_unit`; each file read
+    once), None for arrays and trimesh objects.
 
     Parameters
     ----------
     meshes : sequence
-        Mesh files, arrays or trimesh objects (only files declare a unit).
+        Mesh files, arrays or trimesh objects.
+
+    Returns
+    -------
+    list of (str or None)
+
+    Examples
+    --------
+    >>> declared_units(["car.glb", "part.stl"])
+    ['m', None]
+    """
+    return [declared_unit(m) if isinstance(m, (str, os.PathLike)) else None for m in meshes]
+
+
+def common_unit(names: list[str], units: list[str | None]) -> str | None:
+    """The one unit of meshes laid on one grid (``units``, each mesh's, by
+    :func:`declared_units`, or the unit a :class:`~isoflow.mesh.bodies.Body`
+    carries): the unit where every mesh has the same, None where any has
+    none (an array, an STL); meshes of different units are refused, as one
+    grid places them all by their numbers.
+
+    Parameters
+    ----------
+    names : list of str
+        Each mesh's name, for the refusal.
+    units : list of (str or None)
+        Each mesh's unit.
 
     Returns
     -------
@@ -145,17 +169,16 @@ def meshes_unit(meshes) -> str | None:
     Raises
     ------
     IsoflowError
-        Two files declare different units, each named with its unit.
+        Two meshes have different units, each named with its unit.
 
     Examples
     --------
-    >>> meshes_unit(["car.glb", "wheel.glb"]), meshes_unit(["car.glb", "part.stl"])
-    ('m', None)
+    >>> common_unit(["a.3mf", "b.3mf"], ["mm", "mm"]), common_unit(["a.3mf", "b.stl"], ["mm", None])
+    ('mm', None)
     """
-    declared = [(os.fspath(m), declared_unit(m)) if isinstance(m, (str, os.PathLike)) else ("", None) for m in meshes]
-    units = {unit for _, unit in declared} - {None}
-    if len(units) > 1:
-        said = ", ".join(f"{mesh} in {unit}" for mesh, unit in declared if unit is not None)
+    known = set(units) - {None}
+    if len(known) > 1:
+        said = ", ".join(f"{name} in {unit}" for name, unit in zip(names, units) if unit is not None)
         raise IsoflowError(f"the meshes declare different length units ({said}), and one grid places them by their "
                            "numbers; scale them to one unit first")
-    return units.pop() if units and all(unit is not None for _, unit in declared) else None
+    return known.pop() if known and None not in units else None
