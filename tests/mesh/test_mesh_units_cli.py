@@ -161,3 +161,41 @@ def test_meshes_voxelised_into_labels_give_their_unit_to_the_file_and_the_result
     r = iso.voxelize_meshes(parts, pitch=0.5)
     assert r.unit == "µm" and r.to_dict()["unit"] == "µm" and sorted(read) == sorted(parts)
     assert iso.voxelize_meshes([parts[0], trimesh.creation.box((2, 3, 4))], pitch=0.5).unit is None
+
+
+def box_dae(path: Path, meter: str | None) -> Path:
+    """A 2x3x4 box as trimesh writes COLLADA (no ``<unit>``), its asset
+    given ``<unit meter="METER"/>`` where ``meter`` is given."""
+    pytest.importorskip("collada")  # trimesh's COLLADA reader and writer
+    data = trimesh.exchange.dae.export_collada(trimesh.creation.box((2, 3, 4)))
+    assert b"<unit" not in data
+    if meter is not None:
+        data = data.replace(b"<up_axis>", f'<unit meter="{meter}" name="some unit"/>\n    <up_axis>'.encode())
+    path.write_bytes(data)
+    return path
+
+
+def test_a_dae_in_millimetres_is_voxelised_and_reported_as_a_3mf_in_millimetres_is(tmp_path):
+    """COLLADA's ``<unit meter="0.001">`` was not read: the volume had no
+    unit, and its NIfTI none. It is read as trimesh reads it (metres a
+    unit; metres where none is given, COLLADA's default), and a DAE in
+    millimetres reports and writes what a 3MF in millimetres does."""
+    dae, threemf = box_dae(tmp_path / "box.dae", "0.001"), box_3mf(tmp_path / "box.3mf", "millimeter")
+    assert trimesh.load(dae).units == "0.001 * meters"
+    for mesh in (dae, threemf):
+        done = isoflow("voxelize", mesh, "--pitch", "0.5", "-o", tmp_path / f"{mesh.suffix[1:]}.nii.gz")
+        assert done.returncode == 0 and "warning" not in done.stderr, done.stderr
+        assert nib.load(tmp_path / f"{mesh.suffix[1:]}.nii.gz").header.get_xyzt_units()[0] == "mm"
+    said = [isoflow("info", mesh, "--pitch", "0.5").stdout for mesh in (dae, threemf)]
+    assert said[0].replace(str(dae), "") == said[1].replace(str(threemf), "")
+    assert "volume                 24 mm^3" in said[0]  # 2 x 3 x 4 millimetres
+    # inches by their metres, COLLADA's default of metres, and a ZAE (its DAE zipped) as its DAE
+    zae = tmp_path / "box.zae"
+    with zipfile.ZipFile(zae, "w") as z:
+        z.write(box_dae(tmp_path / "in.dae", "0.0254"), "in.dae")
+    for mesh, theirs, ours in ((tmp_path / "in.dae", "0.0254 * meters", "in"), (zae, "0.0254 * meters", "in"),
+                               (box_dae(tmp_path / "plain.dae", None), "meters", "m")):
+        assert trimesh.load(mesh).units == theirs
+        done = isoflow("info", mesh, "--pitch", "0.5", "--json")
+        assert done.returncode == 0, done.stderr
+        assert json.loads(done.stdout)["unit"] == ours

@@ -1,10 +1,14 @@
 """The length unit a mesh file declares, for the volume voxelised from it.
 
-Most mesh formats (STL, OBJ, PLY, OFF) hold bare numbers. Two say what
+Most mesh formats (STL, OBJ, PLY, OFF) hold bare numbers. Three say what
 they are in: a 3MF model's ``unit`` attribute (``micron``, ``millimeter``,
 ``centimeter``, ``inch``, ``foot``, ``meter``; millimetres where it is left
-out, by the 3MF core specification), and glTF, whose distances are metres
-by its specification (trimesh's ``Scene.units`` says the same of both).
+out, by the 3MF core specification), glTF, whose distances are metres by
+its specification, and COLLADA, whose document ``<asset>`` gives its unit
+as metres per unit (``<unit meter="0.001" name="millimeter"/>``; metres
+where it is left out, by the COLLADA specification's default of 1.0), as
+trimesh's reader takes it (trimesh's ``Scene.units`` says the same of all
+three: ``0.001 * meters``).
 A pitch given for such a mesh is in that unit, and so are the volume's
 voxel size and origin: a volume written without it reads back as a
 number of no unit, which a NIfTI reader then takes for millimetres.
@@ -12,12 +16,13 @@ number of no unit, which a NIfTI reader then takes for millimetres.
 
 from __future__ import annotations
 
+import math
 import os
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
-from ..digital.units import LENGTH_UNITS, length_unit
+from ..digital.units import LENGTH_UNITS, PICOMETRES, length_unit
 from ..errors import IsoflowError
 
 # the glTF 2.0 specification, "Coordinate System and Units": "The units
@@ -41,9 +46,10 @@ def declared_unit(path: str | os.PathLike) -> str | None:
         In isoflow's spelling (:func:`~isoflow.digital.units.length_unit`):
         ``"m"`` for a glTF or GLB file (but isoflow's own, which holds its
         volume's numbers: None), a 3MF model's ``unit`` (``"mm"``
-        where it gives none); None for a format that holds no unit (STL,
-        OBJ, PLY, OFF, ...) and for a 3MF file whose model cannot be read
-        here (the mesh reader then says why).
+        where it gives none), a COLLADA file's (DAE, or the first DAE of a
+        ZAE: :func:`collada_unit`); None for a format that holds no unit
+        (STL, OBJ, PLY, OFF, ...) and for a 3MF or COLLADA file that cannot
+        be read here (the mesh reader then says why).
 
     Examples
     --------
@@ -60,6 +66,8 @@ def declared_unit(path: str | os.PathLike) -> str | None:
         return None if gltf_generator(Path(path)) == "isoflow" else GLTF_UNIT
     if suffix == ".3mf":
         return threemf_unit(Path(path))
+    if suffix in (".dae", ".zae"):
+        return collada_unit(Path(path))
     return None
 
 
@@ -109,6 +117,68 @@ def threemf_unit(path: Path) -> str | None:
     except (OSError, zipfile.BadZipFile, ET.ParseError, KeyError):
         return None
     return None
+
+
+def collada_unit(path: Path) -> str | None:
+    """A COLLADA file's unit: the ``meter`` of the ``<unit>`` in the
+    document's own ``<asset>`` (metres where it gives none, the COLLADA
+    specification's default, as trimesh reads it) as the one of isoflow's
+    length units of that many metres, None where it is none of them or the
+    file cannot be read here (the mesh reader then says why). A ZAE's is
+    its first DAE member's, the one trimesh reads.
+
+    Parameters
+    ----------
+    path : Path
+        A ``.dae`` or ``.zae`` file.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> import pathlib, tempfile, trimesh
+    >>> data = trimesh.exchange.dae.export_collada(trimesh.creation.box())
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "box.dae"
+    >>> _ = path.write_bytes(data.replace(b"<up_axis>", b'<unit meter="0.0254" name="inch"/><up_axis>'))
+    >>> collada_unit(path), collada_unit(path.with_name("absent.dae"))
+    ('in', None)
+    """
+    try:
+        if path.suffix.lower() == ".zae":
+            with zipfile.ZipFile(path) as package:
+                member = next((n for n in package.namelist() if n.lower().endswith(".dae")), None)
+                if member is None:
+                    return None
+                with package.open(member) as stream:
+                    meter = collada_meter(stream)
+        else:
+            with open(path, "rb") as stream:
+                meter = collada_meter(stream)
+    except (OSError, zipfile.BadZipFile, ET.ParseError, ValueError):
+        return None
+    # the unit of that many metres (the names files give, "millimeter", "inch", vary; the number is the unit)
+    return next((unit for unit, pm in PICOMETRES.items() if math.isclose(pm * 1e-12, meter, rel_tol=1e-9)), None)
+
+
+def collada_meter(stream) -> float:
+    """Metres per unit of a COLLADA document: its ``<asset>``'s ``<unit
+    meter>``, 1.0 where it gives none (only the document's own asset is
+    read: a node's or a geometry's may say other things of theirs)."""
+    depth, meter = 0, 1.0
+    for event, element in ET.iterparse(stream, events=("start", "end")):
+        local = element.tag.rsplit("}", 1)[-1]
+        depth += 1 if event == "start" else -1
+        if event == "start" and depth == 3 and local == "unit":
+            meter = float(element.get("meter", "1.0"))
+        elif event == "end" and depth == 1 and local == "asset":  # the document's asset is over
+            break
+        elif event == "start" and depth == 2 and local != "asset":  # no asset first: none (the schema puts it first)
+            break
+    if not (math.isfinite(meter) and meter > 0):
+        raise ValueError(f"unit meter {meter}")
+    return meter
 
 
 def model_part(package: zipfile.ZipFile) -> str | None:

@@ -1092,7 +1092,7 @@ def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolu
     DigitalObject or (DigitalObject, Voxelization)
         The object's ``unit`` is the length unit the file declares
         (:func:`~isoflow.mesh.mesh_units.declared_unit`: a 3MF model's, a
-        glTF's metres), None where its format holds none.
+        glTF's metres, a COLLADA file's), None where its format holds none.
 
     Raises
     ------
