@@ -1236,6 +1236,34 @@ def test_a_mask_written_0_255_is_that_mask_in_every_format(tmp_path, capsys, lab
     fails(capsys, "info", _saved(tmp_path / "two.npy", labels), words=("not a binary volume", "--label N"))
 
 
+def test_what_the_readers_take_for_a_mask_is_written_as_one_and_read_so_block_by_block(tmp_path):
+    """A mask is 0 and one other value (docs/formats.md). The readers took
+    0/-1 and 0/0.5 arrays for masks, but ``write_volume`` refused the same
+    arrays, and a store of 0/0.5 read block by block was refused where read
+    whole it was a mask. Now each is that value's mask on every side: as
+    nibabel reads the NIfTI written, and as scikit-image counts it."""
+    zarr = pytest.importorskip("zarr")
+    measure = pytest.importorskip("skimage.measure")
+    mask = np.random.default_rng(4).random((9, 10, 11)) < 0.4
+    write = "import sys, numpy as np, isoflow; isoflow.write_volume(np.load(sys.argv[1]), sys.argv[2])"
+    for name, array in (("minus", -mask.astype(np.int16)), ("half", mask * np.float32(0.5)),
+                        ("grey", mask.astype(np.uint8) * 255)):
+        done = subprocess.run([sys.executable, "-c", write, _saved(tmp_path / f"{name}.npy", array),
+                               tmp_path / f"{name}.nii.gz"], capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        assert np.array_equal(np.asarray(nib.load(tmp_path / f"{name}.nii.gz").dataobj), mask), name
+    zarr.create_array(str(tmp_path / "half.zarr"), data=mask * np.float32(0.5), chunks=(4, 4, 4))
+    for source in ("half.npy", "half.zarr"):  # read whole, and block by block
+        done = subprocess.run([sys.executable, "-m", "isoflow", "info", tmp_path / source, "--json"],
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        report = json.loads(done.stdout)
+        assert report["voxels"] == np.count_nonzero(mask), source
+        assert report["euler_characteristic"] == measure.euler_number(mask, connectivity=1), source
+    with pytest.raises(isoflow.IsoflowError, match="not a binary volume"):  # two values beside 0: no mask
+        isoflow.write_volume(mask * 0.5 + np.eye(9, 10)[:, :, None] * mask, tmp_path / "two.npy")
+
+
 def _saved(path, array):
     np.save(path, array)
     return path

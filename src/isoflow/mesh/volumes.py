@@ -1081,7 +1081,9 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
     Parameters
     ----------
     obj : DigitalObject
-        The object (a bare binary array is taken at the origin).
+        The object (a bare binary array is taken at the origin; an array
+        of 0 and one other value, 0/255 or 0/-1, as that value's mask, as
+        :func:`read_volume` reads such an array from a file).
     path : str or os.PathLike
         The file; its suffix names the format (``FILE.h5:/dataset`` too).
     force : bool
@@ -1134,6 +1136,11 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
     try:
         obj = DigitalObject.of(obj)
     except NotBinary as exc:
+        # an array of 0 and one other value (0/255, 0/-1, 0/0.5) is that value's mask, as the file readers
+        # read the same array: what they read as a mask is written as one, and reads back as the same mask
+        mask = one_value_mask(obj) if isinstance(obj, np.ndarray) else obj
+        if mask is not obj:
+            return write_volume(mask, path, force, unit=unit)
         if exc.kind != "labels" or not exc.every or isinstance(obj, DigitalObject) or np.ndim(obj) not in (2, 3):
             raise
         # a label image (2D or 3D, as write_labels takes it) is written as one by write_labels: a table is no file

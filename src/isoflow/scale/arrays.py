@@ -328,9 +328,10 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
         # a float block's whole values say nothing of the blocks not read,
         # which a label table reads too: whether it takes them is not known
         every = None if labels and near is not None and arr.dtype.kind == "f" else labels
-        # a block of 0 and one other value (a 0/255 mask read block by block): the label that selects it is
-        # that value (a whole array of one value is read as its mask by the file readers, never refused)
-        one = near is not None and labels and bool(np.all(values == value)) and not bool((arr == 1).any())
+        # a block of 0 and one other value (a 0/255 mask read block by block, or 0/0.5): the label that selects
+        # it is that value (a whole array of one value is read as its mask by the file readers, never refused)
+        one = (near is not None and bool(np.isfinite(value)) and bool(np.all(values == value))
+               and not bool((arr == 1).any()))
         raise NotBinary(bare + (", or give every label its row with isoflow.label_table(volume)" if table else ""),
                         bare, every=every, kind=kind, value=value if one else None)
     return arr.astype(bool)
