@@ -176,6 +176,31 @@ def test_point_list_fields_are_plain_numbers(tmp_path, capsys, text, words):
     fails(capsys, "info", path, words=words)
 
 
+@pytest.mark.parametrize("separator", [" ", ",", ", "])  # numpy's reader, and the line reader (", " mixes both)
+@pytest.mark.parametrize("written", ["1.00000000000000000001", "10000000000000000000001e-22", "-2.9999999999999999999"])
+def test_a_coordinate_with_more_digits_than_float64_holds_is_refused_as_written(tmp_path, separator, written):
+    """float64 keeps 15 to 17 digits: ``1.00000000000000000001`` read as
+    1.0 was taken for the integer 1, a point the file does not hold. A
+    coordinate is whole as written (Python's Fraction of the text), or
+    refused as ``1.5`` is, naming the file, the line and the value; whole
+    decimals (``1.5e1``, ``2.000``) are read as before."""
+    from fractions import Fraction
+
+    assert float(written) == round(float(written)) and Fraction(written).denominator != 1
+    bad = tmp_path / "bad.txt"
+    bad.write_text(separator.join(["0", "0", "0"]) + "\n" + separator.join([written, "0", "0"]) + "\n")
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", bad, "--points-are", "voxels"],
+                          capture_output=True, text=True)
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert done.stderr.strip() == f"isoflow info: error: {bad}:2: coordinate {written} is not an integer"
+    good = tmp_path / "good.txt"
+    good.write_text(separator.join(["0", "0", "0"]) + "\n" + separator.join(["1.5e1", "2.000", "1E+1"]) + "\n")
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", good, "--points-are", "voxels", "--json"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["shape"] == [16, 3, 11]  # points (0, 0, 0) and (15, 2, 10)
+
+
 def test_point_list_with_a_header_of_column_names_reads_its_points(tmp_path, capsys):
     """A CSV written with a header line (csv.DictWriter's, pandas'
     to_csv's: ``x,y,z``) was refused, "not a number: 'x'". The header is

@@ -801,6 +801,8 @@ def _read_points_fast(path: Path, commas: bool, header: int = 0, index: bool = F
         return None
     if dtype is np.float64 and not (np.isfinite(values).all() and (values == np.round(values)).all()):
         return None
+    if dtype is np.float64 and float64_may_round(path, encoding):
+        return None  # whole as float64, but maybe not as written: the line reader decides on the text
     if (values > MAX_COORDINATE).any() or (values < -MAX_COORDINATE).any():  # (abs overflows at int64's least)
         return None
     return values.astype(np.int64, copy=False)
@@ -850,10 +852,80 @@ def _point(path: Path, lineno: int, line: str, width: int | None, index: bool = 
         v = float(f)  # "1e999" is inf: out of range, before round() fails on it
         if abs(v) > MAX_COORDINATE:  # 1e300 or int64 extremes overflow later
             raise IsoflowError(f"{path}:{lineno}: coordinate {f} is out of range (beyond +-{MAX_COORDINATE})")
-        if v != round(v):
+        # a long number, or one of a negative exponent, may be whole as float64 alone (float64_may_round)
+        if v != round(v) or ((len(f) > EXACT_RUN or "e-" in f or "E-" in f) and not whole_text(f)):
             raise IsoflowError(f"{path}:{lineno}: coordinate {f} is not an integer")
         point.append(int(round(v)))
     return point
+
+
+#: characters of a number's digits and point beyond which float64 may
+#: round a fraction away: 15 significant digits always read back exactly
+EXACT_RUN = 16
+
+
+def float64_may_round(path: Path, encoding: str = "utf-8-sig") -> bool:
+    """Whether a text file of decimals may hold a number that float64 reads
+    as whole but is not as written: one with a negative exponent (``1e-400``
+    is 0.0) or more than :data:`EXACT_RUN` digits and points in a row
+    (``1.00000000000000000001`` is 1.0). A number of 15 significant digits
+    or fewer that reads as a whole float64 is that whole number: its
+    distance to any other whole number is above float64's rounding.
+
+    Parameters
+    ----------
+    path : Path
+        The text file.
+    encoding : str
+        Its encoding, as :func:`read_points` finds it.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> _ = (folder / "whole.txt").write_text("2.0 3.000 1.5e1\\n")
+    >>> _ = (folder / "long.txt").write_text("1.00000000000000000001 0 0\\n")
+    >>> float64_may_round(folder / "whole.txt"), float64_may_round(folder / "long.txt")
+    (False, True)
+    """
+    data = path.read_bytes() if encoding != "utf-16" else path.read_text(encoding=encoding).encode()
+    if b"e-" in data or b"E-" in data:
+        return True
+    # digits and points as "1", the rest as "0": a run of EXACT_RUN + 1 ones is a number float64 may round
+    return b"1" * (EXACT_RUN + 1) in data.translate(_DIGITS_AS_ONES)
+
+
+#: :func:`float64_may_round`'s table of bytes: digits and the point to "1"
+_DIGITS_AS_ONES = bytes(49 if chr(b) in "0123456789." else 48 for b in range(256))
+
+
+def whole_text(number: str) -> bool:
+    """Whether a decimal number, as written, is a whole number: exactly,
+    digit by digit, where float64 keeps 15 to 17 significant digits and
+    so reads ``1.00000000000000000001`` as 1.
+
+    Parameters
+    ----------
+    number : str
+        A decimal number (``2.0``, ``1.5e1``, ``-3``).
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> whole_text("1.5e1"), whole_text("2.000"), whole_text("1.00000000000000000001")
+    (True, True, False)
+    """
+    from decimal import Decimal
+
+    exact = Decimal(number)
+    return exact == exact.to_integral_value()
 
 
 #: how :func:`read_object` reads a point list: cube corners (the paper's point model) or voxel indices
