@@ -21,6 +21,7 @@ import os
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
+from typing import IO
 
 from ..digital.units import LENGTH_UNITS, PICOMETRES, length_unit
 from ..errors import IsoflowError
@@ -152,17 +153,17 @@ def collada_unit(path: Path) -> str | None:
                 if member is None:
                     return None
                 with package.open(member) as stream:
-                    meter = collada_meter(stream)
+                    meter = _collada_meter(stream)
         else:
             with open(path, "rb") as stream:
-                meter = collada_meter(stream)
+                meter = _collada_meter(stream)
     except (OSError, zipfile.BadZipFile, ET.ParseError, ValueError):
         return None
     # the unit of that many metres (the names files give, "millimeter", "inch", vary; the number is the unit)
     return next((unit for unit, pm in PICOMETRES.items() if math.isclose(pm * 1e-12, meter, rel_tol=1e-9)), None)
 
 
-def collada_meter(stream) -> float:
+def _collada_meter(stream: IO[bytes]) -> float:
     """Metres per unit of a COLLADA document: its ``<asset>``'s ``<unit
     meter>``, 1.0 where it gives none (only the document's own asset is
     read: a node's or a geometry's may say other things of theirs)."""
