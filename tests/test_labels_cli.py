@@ -2063,3 +2063,34 @@ def test_info_labels_json_names_a_bool_image_as_its_uint8_labels(tmp_path, capsy
         out = json.loads(run(capsys, "info", tmp_path / name, "--labels", "--json"))
         assert out["dtype"] == np.dtype(np.uint8).name
         assert [row["label"] for row in out["labels"]] == [1] and out["labels"][0]["voxels"] == mask.sum()
+
+
+@pytest.mark.parametrize("suffix", [".nii.gz", ".zarr"])
+def test_a_label_a_float_image_cannot_hold_selects_no_voxel(tmp_path, suffix):
+    """--label 16777217 on a float32 label image picked the voxels of
+    16777216: NumPy compares the array with the label rounded to float32.
+    No voxel of the file holds 16777217 (NumPy in float64 says so); the
+    command says so in one line, in memory and block by block alike."""
+    nib = pytest.importorskip("nibabel")
+    zarr = pytest.importorskip("zarr")
+    image = np.zeros((6, 6, 6), np.float32)
+    image[1:3, 1:3, 1:3] = 16777216.0
+    image[4, 4, 4] = 5.0
+    path = tmp_path / f"seg{suffix}"
+    if suffix == ".zarr":
+        zarr.create_array(str(path), shape=image.shape, chunks=(3, 3, 3), dtype="float32", fill_value=0)[...] = image
+    else:
+        nib.save(nib.Nifti1Image(image, np.eye(4)), path)
+    assert np.count_nonzero(image.astype(np.float64) == 16777217) == 0
+    assert np.count_nonzero(image == 16777217) == 8  # the rounding the command made
+    for command in (["info", path], ["surface", path, "-o", tmp_path / "s.ply"]):
+        done = subprocess.run([sys.executable, "-m", "isoflow", *map(str, command), "--label", "16777217"],
+                              capture_output=True, text=True)
+        lines = done.stderr.strip().splitlines()
+        assert done.returncode == 2 and len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
+        assert f"{path.name}: no voxel has label 16777217: a float32 array cannot hold it" in lines[0], lines
+        assert "16777216" in lines[0], lines
+    assert not (tmp_path / "s.ply").exists()
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--label", "16777216", "--json"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0 and json.loads(done.stdout)["voxels"] == np.count_nonzero(image == 16777216.0)
