@@ -2094,3 +2094,35 @@ def test_a_label_a_float_image_cannot_hold_selects_no_voxel(tmp_path, suffix):
     done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--label", "16777216", "--json"],
                           capture_output=True, text=True)
     assert done.returncode == 0 and json.loads(done.stdout)["voxels"] == np.count_nonzero(image == 16777216.0)
+
+
+def test_a_segmentation_named_without_or_past_its_labels_group_is_offered_by_name(tmp_path, segmentation):
+    """``image.zarr:cells`` (without ``labels/``) listed the image's levels
+    alone, and ``image.zarr:labels/cell`` said "its arrays: []" of the
+    labels/ group, whose segmentations are groups: neither named the
+    segmentation the store holds. Each line now names it as it is read
+    (the groups zarr lists under labels/), exit 2, one line."""
+    zarr = pytest.importorskip("zarr")
+    zyx = np.ascontiguousarray(segmentation.transpose(2, 1, 0))
+    axes = [{"name": a, "type": "space"} for a in "zyx"]
+    root = zarr.open_group(str(tmp_path / "image.zarr"), mode="w", zarr_format=2)
+    for group, data in ((root, (zyx > 0).astype(np.uint8)), (root.require_group("labels/cells"), zyx)):
+        group.create_array("0", data=data, chunks=(5, 5, 5))
+        group.attrs["multiscales"] = [{"version": "0.4", "axes": axes, "datasets": [{"path": "0", "coordinateTransformations": [
+            {"type": "scale", "scale": [1.0, 1.0, 1.0]}]}]}]
+    root["labels"].attrs["labels"] = ["cells"]
+    assert [name for name, _ in zarr.open_group(str(tmp_path / "image.zarr"), mode="r")["labels"].groups()] == ["cells"]
+    store = tmp_path / "image.zarr"
+    for name, words in (("cells", ("no resolution level 'cells'", f"its segmentations: {store}:labels/cells")),
+                        ("labels/cell", ("no array or group 'cell'", f"its groups: ['cells']; name one, "
+                                                                     f"{store}:labels/cells"))):
+        done = subprocess.run([sys.executable, "-m", "isoflow", "info", f"{store}:{name}", "--labels"],
+                              capture_output=True, text=True)
+        lines = done.stderr.strip().splitlines()
+        assert done.returncode == 2 and len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
+        for word in words:
+            assert word in lines[0], (word, lines[0])
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", f"{store}:labels/cells", "--labels", "--json"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0 and [r["voxels"] for r in json.loads(done.stdout)["labels"]] == [
+        np.count_nonzero(segmentation == v) for v in np.unique(segmentation) if v]
