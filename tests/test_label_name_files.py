@@ -304,3 +304,23 @@ def test_numbers_given_for_names_are_refused_not_read_as_labels(tmp_path, text, 
         isoflow.read_label_names(bad)
     bad.write_text("1 liver\n2 17\n")  # one number may be a name (a region's code)
     assert isoflow.read_label_names(bad) == {1: "liver", 2: "17"}
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-be"])
+def test_a_utf16_table_of_names_reads_as_the_text_it_is(tmp_path, seg, encoding):
+    """Excel's "Unicode Text" (and PowerShell's ``>``) writes UTF-16 behind
+    a byte-order mark: its half NUL bytes were refused as "binary data",
+    though Python's codecs read it as the table it is. ``--names`` reads
+    it so: each row is named as the decoded text says, exit 0."""
+    table = "label\tname\r\n2\tLeft-Cerebral-White-Matter\r\n17\tHippocampus ø\r\n53\tRight-Hippocampus\r\n"
+    data = table.encode(encoding)
+    if encoding == "utf-16-be":  # (Python's utf-16-be writes no byte-order mark; Windows tools do)
+        data = b"\xfe\xff" + data
+    path = tmp_path / "names.txt"
+    path.write_bytes(data)
+    assert b"\0" in data and data.decode("utf-16") == table
+    want = {int(k): v for k, v in csv.reader(io.StringIO(data.decode("utf-16")), delimiter="\t") if k != "label"}
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(seg), "--labels", "--names", str(path),
+                           "--json", "--no-surfaces", "-q"], capture_output=True, text=True)
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+    assert {r["label"]: r["name"] for r in json.loads(done.stdout)["labels"]} == want

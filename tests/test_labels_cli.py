@@ -2063,3 +2063,66 @@ def test_info_labels_json_names_a_bool_image_as_its_uint8_labels(tmp_path, capsy
         out = json.loads(run(capsys, "info", tmp_path / name, "--labels", "--json"))
         assert out["dtype"] == np.dtype(np.uint8).name
         assert [row["label"] for row in out["labels"]] == [1] and out["labels"][0]["voxels"] == mask.sum()
+
+
+@pytest.mark.parametrize("suffix", [".nii.gz", ".zarr"])
+def test_a_label_a_float_image_cannot_hold_selects_no_voxel(tmp_path, suffix):
+    """--label 16777217 on a float32 label image picked the voxels of
+    16777216: NumPy compares the array with the label rounded to float32.
+    No voxel of the file holds 16777217 (NumPy in float64 says so); the
+    command says so in one line, in memory and block by block alike."""
+    nib = pytest.importorskip("nibabel")
+    zarr = pytest.importorskip("zarr")
+    image = np.zeros((6, 6, 6), np.float32)
+    image[1:3, 1:3, 1:3] = 16777216.0
+    image[4, 4, 4] = 5.0
+    path = tmp_path / f"seg{suffix}"
+    if suffix == ".zarr":
+        zarr.create_array(str(path), shape=image.shape, chunks=(3, 3, 3), dtype="float32", fill_value=0)[...] = image
+    else:
+        nib.save(nib.Nifti1Image(image, np.eye(4)), path)
+    assert np.count_nonzero(image.astype(np.float64) == 16777217) == 0
+    assert np.count_nonzero(image == 16777217) == 8  # the rounding the command made
+    for command in (["info", path], ["surface", path, "-o", tmp_path / "s.ply"]):
+        done = subprocess.run([sys.executable, "-m", "isoflow", *map(str, command), "--label", "16777217"],
+                              capture_output=True, text=True)
+        lines = done.stderr.strip().splitlines()
+        assert done.returncode == 2 and len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
+        assert f"{path.name}: no voxel has label 16777217: a float32 array cannot hold it" in lines[0], lines
+        assert "16777216" in lines[0], lines
+    assert not (tmp_path / "s.ply").exists()
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--label", "16777216", "--json"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0 and json.loads(done.stdout)["voxels"] == np.count_nonzero(image == 16777216.0)
+
+
+def test_a_segmentation_named_without_or_past_its_labels_group_is_offered_by_name(tmp_path, segmentation):
+    """``image.zarr:cells`` (without ``labels/``) listed the image's levels
+    alone, and ``image.zarr:labels/cell`` said "its arrays: []" of the
+    labels/ group, whose segmentations are groups: neither named the
+    segmentation the store holds. Each line now names it as it is read
+    (the groups zarr lists under labels/), exit 2, one line."""
+    zarr = pytest.importorskip("zarr")
+    zyx = np.ascontiguousarray(segmentation.transpose(2, 1, 0))
+    axes = [{"name": a, "type": "space"} for a in "zyx"]
+    root = zarr.open_group(str(tmp_path / "image.zarr"), mode="w", zarr_format=2)
+    for group, data in ((root, (zyx > 0).astype(np.uint8)), (root.require_group("labels/cells"), zyx)):
+        group.create_array("0", data=data, chunks=(5, 5, 5))
+        group.attrs["multiscales"] = [{"version": "0.4", "axes": axes, "datasets": [{"path": "0", "coordinateTransformations": [
+            {"type": "scale", "scale": [1.0, 1.0, 1.0]}]}]}]
+    root["labels"].attrs["labels"] = ["cells"]
+    assert [name for name, _ in zarr.open_group(str(tmp_path / "image.zarr"), mode="r")["labels"].groups()] == ["cells"]
+    store = tmp_path / "image.zarr"
+    for name, words in (("cells", ("no resolution level 'cells'", f"its segmentations: {store}:labels/cells")),
+                        ("labels/cell", ("no array or group 'cell'", f"its groups: ['cells']; name one, "
+                                                                     f"{store}:labels/cells"))):
+        done = subprocess.run([sys.executable, "-m", "isoflow", "info", f"{store}:{name}", "--labels"],
+                              capture_output=True, text=True)
+        lines = done.stderr.strip().splitlines()
+        assert done.returncode == 2 and len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
+        for word in words:
+            assert word in lines[0], (word, lines[0])
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", f"{store}:labels/cells", "--labels", "--json"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0 and [r["voxels"] for r in json.loads(done.stdout)["labels"]] == [
+        np.count_nonzero(segmentation == v) for v in np.unique(segmentation) if v]

@@ -755,3 +755,35 @@ def test_split_of_a_scene_given_in_python_keeps_a_node_of_several_primitives_one
     assert len(scene.graph.nodes_geometry) == 3  # the cube's two primitives and the crate
     result = voxelize_meshes([scene], pitch=0.25, split=True)
     assert sorted(result.names) == ["mesh 1:crate", "mesh 1:cube"] and result.voxels == (64, 64)
+
+
+@pytest.mark.parametrize("meshes", [1, 2])
+def test_a_grid_longer_than_nifti_holds_is_one_line_and_no_file(tmp_path, meshes):
+    """A thin rod 40000 voxels long written as .nii.gz was nibabel's
+    HeaderDataError as a traceback, after all the work: NIfTI-1's dim[]
+    is int16 (nibabel's own header refuses the shape). It is one line
+    naming the file, the shape and the formats that hold it, exit 2, and
+    no file; the same grid as .nrrd is written, read back by pynrrd."""
+    nib = pytest.importorskip("nibabel")
+    nrrd = pytest.importorskip("nrrd")
+    with pytest.raises(nib.spatialimages.HeaderDataError):
+        nib.Nifti1Header().set_data_shape((40000, 2, 2))
+    rod = trimesh.creation.box(extents=(40000, 2, 2))
+    rod.export(tmp_path / "rod.stl")
+    paths = [tmp_path / "rod.stl"]
+    if meshes == 2:
+        cube = trimesh.creation.box(extents=(2, 2, 2))
+        cube.apply_translation((0, 3, 0))
+        cube.export(tmp_path / "cube.stl")
+        paths.append(tmp_path / "cube.stl")
+    command = [sys.executable, "-m", "isoflow", "voxelize", *map(str, paths), "--pitch", "1", "-q"]
+    done = subprocess.run([*command, "-o", str(tmp_path / "rod.nii.gz")], capture_output=True, text=True)
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
+    assert "rod.nii.gz: NIfTI-1 holds at most 32767 voxels a side" in lines[0], lines
+    assert "40000x" in lines[0] and ".nrrd" in lines[0], lines
+    assert not (tmp_path / "rod.nii.gz").exists()
+    done = subprocess.run([*command, "-o", str(tmp_path / "rod.nrrd")], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    data, _ = nrrd.read(str(tmp_path / "rod.nrrd"))
+    assert data.shape[0] == 40000 and np.count_nonzero(data == 1) == 40000 * 2 * 2

@@ -484,7 +484,8 @@ def _volume_of_node(zarr, node, path: Path, level: str | None, inside: bool = Fa
         elif level is not None and level.isdigit() and int(level) < len(paths):
             i = int(level)
         else:
-            raise IsoflowError(f"{path}: no resolution level {level!r} in the OME-Zarr image (levels: {paths})")
+            raise IsoflowError(f"{path}: no resolution level {level!r} in the OME-Zarr image (levels: {paths}"
+                               f"{segmentations_named(node, path, inside)})")
         try:
             array = node[paths[i]]
         except Exception as exc:
@@ -497,6 +498,10 @@ def _volume_of_node(zarr, node, path: Path, level: str | None, inside: bool = Fa
         # a plain group: the name picks one of its arrays (a segmentation
         # beside its image), as FILE.h5:/dataset does
         if level not in arrays:
+            groups = sorted(name for name, _ in node.groups())
+            if groups and not arrays:  # an OME-Zarr image's labels/ group: its segmentations are groups
+                raise IsoflowError(f"{path}: no array or group {level!r} in the zarr group (its groups: {groups}; "
+                                   f"name one, {path}{'/' if inside else ':'}{groups[0]})")
             raise IsoflowError(f"{path}: no array {level!r} in the zarr group (its arrays: {sorted(arrays)}; "
                                "it is no OME-Zarr image, whose levels the name would also pick)")
         node = arrays[level]
@@ -513,6 +518,46 @@ def _volume_of_node(zarr, node, path: Path, level: str | None, inside: bool = Fa
         first = sorted(arrays)[0]
         raise IsoflowError(f"{path}: a zarr group with arrays {sorted(arrays)}; name one, {path}:{first}")
     return node, None, None
+
+
+def segmentations_named(node, path, inside: bool) -> str:
+    """The end of the refusal of a name that is no level of the OME-Zarr
+    image ``node``: its segmentations (the groups of its ``labels/``
+    group, NGFF's image-label), each as the name that reads it, which a
+    name given without ``labels/`` (``image.zarr:cells``) meant; nothing
+    where it has none.
+
+    Parameters
+    ----------
+    node : zarr.Group
+        The image's group.
+    path : str or Path
+        The image as the refusal names it (``image.zarr``, or
+        ``store.zarr:inner`` for an image inside a store).
+    inside : bool
+        Whether the image is a group inside the store (its names follow a
+        ``/``, not the store's ``:``).
+
+    Returns
+    -------
+    str
+        ``"; its segmentations: image.zarr:labels/cells"``, or ``""``.
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> g = zarr.open_group(tempfile.mkdtemp() + "/image.zarr", mode="w")
+    >>> _ = g.create_array("labels/cells/0", shape=(2, 2, 2), dtype="u1")
+    >>> segmentations_named(g, "image.zarr", False), segmentations_named(g["labels/cells"], "x", True)
+    ('; its segmentations: image.zarr:labels/cells', '')
+    """
+    try:
+        labels = node["labels"]
+        names = sorted(name for name, _ in labels.groups())
+    except (KeyError, ValueError, AttributeError):  # no labels/ group, or an array of that name
+        return ""
+    shown = ", ".join(f"{path}{'/' if inside else ':'}labels/{name}" for name in names[:5])
+    return f"; its segmentations: {shown}{', ...' if len(names) > 5 else ''}" if names else ""
 
 
 def _level_names(node) -> list[str]:

@@ -20,8 +20,9 @@ content (the suffix only breaks a tie):
   ``label_names`` isoflow writes), or an nnU-Net ``dataset.json`` whose
   ``labels`` map name to label (``{"background": 0, "spleen": 1}``).
 
-``#`` starts a comment line and blank lines are skipped in the text
-kinds. Label 0 is the background and is not named; a label named twice is
+The text is UTF-8 (Latin-1 where it is none), or UTF-16 behind its
+byte-order mark (Excel's "Unicode Text"). ``#`` starts a comment line and
+blank lines are skipped in the text kinds. Label 0 is the background and is not named; a label named twice is
 refused naming the line. A file of numbers alone (a point list, ``0 0 0``
 per line, given for the names) is refused, not read as labels named by
 their numbers, and so is a line ``index name`` whose name is several
@@ -31,6 +32,7 @@ numbers (colour columns without a name).
 from __future__ import annotations
 
 import bisect
+import codecs
 import csv
 import json
 import os
@@ -123,6 +125,15 @@ def read_label_names(path: str | os.PathLike) -> dict[int, str]:
         if isinstance(exc, (FileNotFoundError, NotADirectoryError)):  # said as every reader says a missing input
             raise missing(where) from None
         raise IsoflowError(f"{where}: cannot read the label names ({exc.strerror or type(exc).__name__})") from None
+    if data.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        # Excel's "Unicode Text" and PowerShell's ">" write UTF-16 behind its byte-order mark: text, though
+        # half its bytes are NUL, which the test below took for binary data
+        try:
+            text = data.decode("utf-16")
+        except UnicodeDecodeError:
+            raise IsoflowError(f"{where}: opens as UTF-16 text (its byte-order mark) but is not UTF-16; "
+                               f"{EXPECTED}") from None
+        return label_names_of(text, where, Path(path).suffix.lower())
     if b"\0" in data[:1 << 16]:  # a volume given for its names (seg.nii.gz), or any binary file
         raise IsoflowError(f"{where}: not a file of label names (it holds binary data); {EXPECTED}")
     try:

@@ -62,6 +62,8 @@ XYZT_UNITS = {"m": "meter", "mm": "mm", "\u00b5m": "micron"}
 #: voxels by which float32's rounding of the affine may move a voxel centre
 #: unsaid: far below any voxel a reader would pick differently
 FLOAT32_SLACK = 1e-3
+#: the longest side NIfTI-1 holds: its header's dim[] is int16
+MAX_SIDE = 32767
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -228,11 +230,16 @@ def placed_by_affine(data: np.ndarray, affine: np.ndarray, where: str, unit: str
 
 def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None,
           space: str | None = None) -> None:
-    """Refuse an array with a side of length 0; warn of a fourth axis's
+    """Refuse an array with a side of length 0 or past NIfTI-1's 32767
+    voxels; warn of a fourth axis's
     placement, which the affine has no room for (read back as voxel size 1
     from 0), as every format says what of the placement it drops."""
     # a NIfTI dimension of 0 is written, but nibabel reads the file back as shape (0,)
     refuse_empty(path, obj.volume.shape, "NIfTI")
+    if max(obj.volume.shape, default=0) > MAX_SIDE:
+        # (nibabel's HeaderDataError came as a traceback once the work was done)
+        raise IsoflowError(f"{path}: NIfTI-1 holds at most {MAX_SIDE} voxels a side (its dim[] is int16), this "
+                           f"image is {'x'.join(map(str, obj.volume.shape))}; write .nrrd, .h5, .zarr or .npz")
     if unit not in XYZT_UNITS:
         unit_not_kept(path, "NIfTI", unit, "the length units m, mm and \u00b5m only")
     float32_placement(path, obj)

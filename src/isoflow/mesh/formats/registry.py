@@ -755,7 +755,8 @@ def check_label(label, dtype, where: str) -> int | float:
     """A label selects voxels of an array of numbers by one finite number:
     returned as the array compares it exactly, a whole number as a Python
     int for an integer array (a float 2.0**63 compared with a uint64 array
-    as a float, which also matched 2**63 + 1 and its neighbours)."""
+    as a float, which also matched 2**63 + 1 and its neighbours); a whole
+    number a float array cannot hold is refused, as no voxel can have it."""
     if np.dtype(dtype).kind not in "biuf":
         raise IsoflowError(f"{where}: array of type {dtype} holds no labels")
     if not np.isscalar(label) or isinstance(label, (str, bytes)):
@@ -777,6 +778,16 @@ def check_label(label, dtype, where: str) -> int | float:
                                f"({info.min} to {info.max})")
     elif not np.isfinite(value):
         raise IsoflowError(f"{where}: label {label} is beyond the values a {dtype} array holds")
+    elif whole and dtype.kind == "f":
+        # NumPy compares a float array with the label rounded to the array's
+        # type: 16777217 picked the voxels of 16777216 in a float32 image
+        with np.errstate(over="ignore"):
+            held = dtype.type(label)
+        if not np.isfinite(held):
+            raise IsoflowError(f"{where}: label {label} is beyond the values a {dtype} array holds")
+        if int(held) != int(label):
+            raise IsoflowError(f"{where}: no voxel has label {number_text(label)}: a {dtype} array cannot hold "
+                               f"it (the nearest value it holds is {int(held)})")
     return int(label) if dtype.kind in "iu" and whole else label
 
 
