@@ -22,11 +22,12 @@ content (the suffix only breaks a tie):
 
 The text is UTF-8 (Latin-1 where it is none), or UTF-16 behind its
 byte-order mark (Excel's "Unicode Text"). ``#`` starts a comment line and
-blank lines are skipped in the text kinds. Label 0 is the background and is not named; a label named twice is
-refused naming the line. A file of numbers alone (a point list, ``0 0 0``
-per line, given for the names) is refused, not read as labels named by
-their numbers, and so is a line ``index name`` whose name is several
-numbers (colour columns without a name).
+blank lines are skipped in the text kinds. Label 0 is the background and
+is not named; a label named twice is refused naming the line. A file of
+numbers alone (a point list, ``0 0 0`` per line, given for the names) is
+refused, not read as labels named by their numbers, and so is a line
+``index name`` whose name is several numbers (colour columns without a
+name).
 """
 
 from __future__ import annotations
