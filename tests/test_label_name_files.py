@@ -324,3 +324,26 @@ def test_a_utf16_table_of_names_reads_as_the_text_it_is(tmp_path, seg, encoding)
                            "--json", "--no-surfaces", "-q"], capture_output=True, text=True)
     assert done.returncode == 0 and done.stderr == "", done.stderr
     assert {r["label"]: r["name"] for r in json.loads(done.stdout)["labels"]} == want
+
+
+@pytest.mark.parametrize(("name", "text"), [
+    ("names.csv", 'index;name\r\n2;Left-Cerebral-White-Matter\r\n17;"Hippocampus; left"\r\n53;Right, Hippocampus\r\n'),
+    ("names.txt", "label;name\n2;white matter\n17;hippocampus\n53;right hippocampus\n"),
+    ("names.csv", 'label,name\n2,white matter\n17,"hippocampus, left"\n53,right hippocampus\n'),
+])
+def test_a_semicolon_csv_reads_by_its_header_and_a_quoted_comma_stays_in_its_name(tmp_path, seg, name, text):
+    """A European Excel writes CSV with semicolons (``index;name``,
+    ``1;liver``), its list separator; such a table was refused as having
+    no header naming a label and a name column. Read from the shell, each
+    row is named as Python's csv module reads the table with the
+    delimiter the header splits at, and a quoted name holding the other
+    separator keeps it."""
+    path = tmp_path / name
+    path.write_text(text)
+    delimiter = ";" if text.startswith(("index;", "label;")) else ","
+    want = {int(k): v for k, v in csv.reader(io.StringIO(text), delimiter=delimiter) if k not in ("index", "label")}
+    assert len(want) == 3
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(seg), "--labels", "--names", str(path),
+                           "--json", "--no-surfaces", "-q"], capture_output=True, text=True)
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+    assert {r["label"]: r["name"] for r in json.loads(done.stdout)["labels"]} == want

@@ -15,7 +15,9 @@ content (the suffix only breaks a tie):
   the name is the rest of the line), where no line has colour columns;
 * CSV or TSV whose header names a label column (``label``, ``index``,
   ``value``, ``labelvalue``) and a name column (``name``, ``label_name``),
-  as 3D Slicer's ``.csv`` colour tables do;
+  as 3D Slicer's ``.csv`` colour tables do; its cells separated by commas,
+  tabs or semicolons (``index;name``, as a European Excel writes CSV),
+  whichever splits the header into those two columns;
 * JSON: an object of label to name (``{"1": "spleen"}``, the
   ``label_names`` isoflow writes), or an nnU-Net ``dataset.json`` whose
   ``labels`` map name to label (``{"background": 0, "spleen": 1}``).
@@ -198,12 +200,15 @@ def _text_pairs(rows: list[tuple[int, str]], text: str, where: str, suffix: str)
     table; ``rows`` the lines of the file ``text`` that are neither blank
     nor comments (number, text)."""
     number, head = rows[0]
-    delimiter = "\t" if suffix == ".tsv" or ("\t" in head and "," not in head) else ","
-    cells = [c.strip().lower() for c in next(_csv_records(rows[:1], text, where, delimiter))[1]]
-    name_at = next((cells.index(c) for c in NAME_COLUMNS if c in cells), None)
-    label_at = next((cells.index(c) for c in LABEL_COLUMNS if c in cells and cells.index(c) != name_at), None)
-    if name_at is not None and label_at is not None:
-        return _table_pairs(_csv_records(rows[1:], text, where, delimiter), where, label_at, name_at)
+    first = "\t" if suffix == ".tsv" or ("\t" in head and "," not in head) else ","
+    # the header says which: a European Excel separates its cells by ";" ("index;name", "1;liver"), as its
+    # list separator is; a delimiter is taken only where it splits the header into a label and a name column
+    for delimiter in dict.fromkeys((first, ",", ";", "\t")):
+        cells = [c.strip().lower() for c in next(_csv_records(rows[:1], text, where, delimiter))[1]]
+        name_at = next((cells.index(c) for c in NAME_COLUMNS if c in cells), None)
+        label_at = next((cells.index(c) for c in LABEL_COLUMNS if c in cells and cells.index(c) != name_at), None)
+        if name_at is not None and label_at is not None:
+            return _table_pairs(_csv_records(rows[1:], text, where, delimiter), where, label_at, name_at)
     _refuse_numbers(rows, where)
     if suffix in (".csv", ".tsv") and not _ITKSNAP.fullmatch(head) and not _LUT.fullmatch(head):
         raise IsoflowError(f"{where}: line {number}: a header naming a label column ({', '.join(LABEL_COLUMNS)}) "
