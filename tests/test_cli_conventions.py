@@ -521,6 +521,36 @@ def test_quiet_keeps_each_warning_that_the_result_differs(tmp_path, capsys):
     assert len(warned) == 1 and "STL keeps no shared vertices" in warned[0], warned
 
 
+@pytest.mark.parametrize(("dtype", "given", "shown"), [
+    (np.int32, "1e300", "1e+300"),  # printed in its 301 digits, the last 285 the float's rounding
+    (np.int64, "18446744073709551617", "18446744073709551617"),  # digits typed stay as typed
+    (np.int16, "-1e20", "-1e+20"),
+    (np.int32, "4e18", "4e+18"),  # within 2**64, printed in 19 digits
+    (np.uint8, "300", "300"),
+    (np.float32, "1e300", "1e+300"),
+])
+def test_a_label_beyond_the_array_s_type_names_the_label_as_typed_and_the_type_with_its_article(
+        tmp_path, dtype, given, shown):
+    """``--label 1e300`` was refused naming label 1000000...160 (301
+    digits), and the type read "a int32". From the shell: one line, exit
+    2, the label as typed (digits) or in Python's shortest form of the
+    float typed, and "an" before a type said with a vowel (int), "a"
+    before uint and float."""
+    labels = np.zeros((3, 3, 3), dtype)
+    labels[1, 1, 1] = 1
+    np.save(tmp_path / "l.npy", labels)
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "l.npy"), f"--label={given}"],
+                          capture_output=True, text=True)
+    name = np.dtype(dtype).name
+    article = "an" if name.startswith("int") else "a"
+    assert done.returncode == 2 and done.stdout == "", done.stderr
+    assert done.stderr.splitlines() == [f"isoflow info: error: {tmp_path / 'l.npy'}: label {shown} is beyond the "
+                                        f"values {article} {name} array holds" + (
+                                            f" ({np.iinfo(dtype).min} to {np.iinfo(dtype).max})"
+                                            if np.dtype(dtype).kind in "iu" else "")]
+    assert shown in (given, repr(float(given)))
+
+
 def test_outputs_and_labels_checked_before_any_work(tmp_path, capsys, monkeypatch):
     """flow --out is checked before the input is read (an open mesh's note
     came first); a label beyond the array's type is one line; a .zarr
@@ -534,7 +564,7 @@ def test_outputs_and_labels_checked_before_any_work(tmp_path, capsys, monkeypatc
     for label in ("99999999999999999999999", "1e20", "18446744073709551615"):
         assert main(["info", str(tmp_path / "l.npy"), f"--label={label}"]) == 2
         err = capsys.readouterr().err.strip().splitlines()
-        assert len(err) == 1 and "beyond the values a int16 array holds" in err[0], err
+        assert len(err) == 1 and "beyond the values an int16 array holds" in err[0], err
     from isoflow.mesh import outputs
 
     monkeypatch.setattr(outputs.os, "access", lambda *a, **k: False)

@@ -76,6 +76,15 @@ def test_a_digital_object_where_an_array_is_taken_is_named(function):
         function(obj)
 
 
+def test_a_mapping_given_for_an_array_is_named_with_its_article():
+    # "volume: a OrderedDict, not an array": the type's name behind the article it is said with
+    import collections
+
+    with pytest.raises(IsoflowError, match=r"^volume: an OrderedDict, not an array$"):
+        isoflow.analyze(collections.OrderedDict(volume=np.ones((2, 2, 2), bool)))
+    with pytest.raises(IsoflowError, match=r"^volume: a dict, not an array$"):
+        isoflow.analyze({"volume": np.ones((2, 2, 2), bool)})
+
 @pytest.mark.parametrize("call,where", [
     (lambda image, p: isoflow.analyze(image), "volume"),
     (lambda image, p: isoflow.boundary_mesh(image), "boundary_mesh"),

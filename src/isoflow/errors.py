@@ -70,12 +70,40 @@ def counted(n: int, one: str, many: str | None = None) -> str:
     return f"{n} {one if n == 1 else many or one + 's'}"
 
 
+def with_article(word: object) -> str:
+    """A word in a message behind its indefinite article: ``an`` before
+    a vowel (a NumPy type ``int16``, ``int64``, ``object``), ``a``
+    otherwise (``uint8``, ``float32``, ``bool``); a message of a
+    ``f"a {dtype} array"`` read "a int16".
+
+    Parameters
+    ----------
+    word : object
+        The word, or what prints as it (a NumPy dtype, a type's name).
+
+    Returns
+    -------
+    str
+        The article, a space and the word as ``str`` prints it.
+
+    Examples
+    --------
+    >>> with_article("int32"), with_article("uint8"), with_article("float32"), with_article("OrderedDict")
+    ('an int32', 'a uint8', 'a float32', 'an OrderedDict')
+    """
+    text = str(word)
+    # a "u" starts uint8 and unicode with the sound of "you": a, as it is said
+    return f"{'an' if text[:1].lower() in ('a', 'e', 'i', 'o') else 'a'} {text}"
+
+
 def number_text(value: object) -> str:
     """A number in a message as the user wrote or meant it: a whole number
     in all its digits (``-1``, not the ``-1.0`` its conversion to float
     prints; ``%g`` made 2**40 + 1 and 2**40 alike), any other float in its
-    shortest repr (``0.5``, ``1e-07``), a sequence as a list of them, and
-    anything else (a string, None) as its repr.
+    shortest repr (``0.5``, ``1e-07``, and a whole float past 2**53,
+    ``1e+300``), a sequence as a list of them, and anything else (a
+    string, None) as its repr. An int is whole digit by digit, however
+    large (``18446744073709551617``).
 
     Parameters
     ----------
@@ -93,6 +121,8 @@ def number_text(value: object) -> str:
     ('-1', '0.5', '1e-07', '1')
     >>> number_text((1.5, 0.0)), number_text(np.array([2**40 + 1])), number_text(np.float32(0.1)), number_text("x")
     ('[1.5, 0]', '[1099511627777]', '0.1', "'x'")
+    >>> number_text(1e300), number_text(18446744073709551617)
+    ('1e+300', '18446744073709551617')
     """
     if getattr(value, "shape", None):  # a NumPy array: its elements (or rows) are NumPy's scalars
         return "[" + ", ".join(number_text(v) for v in value) + "]"  # type: ignore[attr-defined]
@@ -101,7 +131,9 @@ def number_text(value: object) -> str:
         return "[" + ", ".join(number_text(v) for v in value) + "]"
     if isinstance(value, bool):  # a mask's values: 0 and 1
         value = int(value)
-    if isinstance(value, float) and value.is_integer() and abs(value) < 2.0**64:
+    if isinstance(value, float) and value.is_integer() and abs(value) < 2.0**53:
+        # past 2**53 a float is no whole number the user wrote digit by digit: --label 1e300 printed as
+        # 301 digits, of which the last 285 are the float's rounding; its shortest repr is what was meant
         value = int(value)
     if isinstance(value, float):
         return repr(value)

@@ -90,7 +90,13 @@ def add_connectivity(p: argparse.ArgumentParser, dims: tuple[int, ...] = (2, 3, 
 
 
 def label_value(text: str) -> int | float:
-    """``--label N``: a number, kept an int when it is one."""
+    """``--label N``: a number, kept an int when it is one.
+
+    Examples
+    --------
+    >>> label_value("18446744073709551617"), label_value("1e3"), label_value("1e300"), label_value("2.5")
+    (18446744073709551617, 1000, 1e+300, 2.5)
+    """
     try:
         return int(text)  # exactly, however large (checked against the array's type)
     except ValueError:
@@ -99,7 +105,8 @@ def label_value(text: str) -> int | float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    return int(value) if value.is_integer() else value
+    # a whole float past 2**53 stays a float: as an int, 1e300 was refused in its 301 digits, not as typed
+    return int(value) if value.is_integer() and abs(value) < 2.0**53 else value
 
 
 def resolution_value(text: str) -> int:

@@ -25,7 +25,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..errors import IsoflowError, counted
+from ..errors import IsoflowError, counted, with_article
 from .memory import sized
 
 
@@ -212,7 +212,8 @@ def refuse_mapping(array: object, where: str = "volume") -> None:
         return
     held = [k for k in array if isinstance(k, str) and isinstance(value := getattr(array, k, None), np.ndarray)
             and value.ndim >= 2]
-    raise IsoflowError(f"{where}: a {type(array).__name__}, not an array" + (f"; pass its .{held[0]}" if held else ""))
+    raise IsoflowError(f"{where}: {with_article(type(array).__name__)}, not an array"
+                       + (f"; pass its .{held[0]}" if held else ""))
 
 
 def is_masked_array(value: object) -> bool:

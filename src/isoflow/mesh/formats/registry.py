@@ -32,7 +32,7 @@ import numpy as np
 from ...digital.frames import frame_text
 from ...digital.lattice import DigitalObject
 from ...digital.units import LENGTH_UNITS, length_unit, unit_factor
-from ...errors import IsoflowError, given_text, number_text, warn
+from ...errors import IsoflowError, given_text, number_text, warn, with_article
 from ...scale.chunks import fourth_axis_name, spatial_axes, split_store
 
 #: the extra that brings every format library (pip install 'isoflow[formats]')
@@ -774,20 +774,20 @@ def check_label(label, dtype, where: str) -> int | float:
     if dtype.kind in "iu" and whole:
         info = np.iinfo(dtype)
         if not info.min <= int(label) <= info.max:
-            raise IsoflowError(f"{where}: label {label} is beyond the values a {dtype} array holds "
+            raise IsoflowError(f"{where}: label {number_text(label)} is beyond the values {with_article(dtype)} array holds "
                                f"({info.min} to {info.max})")
     elif not np.isfinite(value):
-        raise IsoflowError(f"{where}: label {label} is beyond the values a {dtype} array holds")
+        raise IsoflowError(f"{where}: label {number_text(label)} is beyond the values {with_article(dtype)} array holds")
     elif whole and dtype.kind == "f":
         # NumPy compares a float array with the label rounded to the array's
         # type: 16777217 picked the voxels of 16777216 in a float32 image
         with np.errstate(over="ignore"):
             held = dtype.type(label)
         if not np.isfinite(held):
-            raise IsoflowError(f"{where}: label {label} is beyond the values a {dtype} array holds")
+            raise IsoflowError(f"{where}: label {number_text(label)} is beyond the values {with_article(dtype)} array holds")
         if int(held) != int(label):
-            raise IsoflowError(f"{where}: no voxel has label {number_text(label)}: a {dtype} array cannot hold "
-                               f"it (the nearest value it holds is {int(held)})")
+            raise IsoflowError(f"{where}: no voxel has label {number_text(label)}: {with_article(dtype)} array "
+                               f"cannot hold it (the nearest value it holds is {int(held)})")
     return int(label) if dtype.kind in "iu" and whole else label
 
 
