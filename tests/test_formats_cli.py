@@ -1859,6 +1859,22 @@ def test_the_command_that_saves_an_ome_tiffs_channels_as_slices_names_a_clean_om
         assert np.array_equal(tif.asarray(), tifffile.imread(tmp_path / "c.ome.tif"))
 
 
+@pytest.mark.parametrize("command", [["info", "--labels"], ["surface", "--labels", "-o", "s.glb"]])
+def test_a_4d_nifti_label_image_is_refused_saying_how_many_time_points(tmp_path, command):
+    """A 4D NIfTI given as labels was refused as "a time series of time
+    points", where the volume commands say how many. Its count is the
+    header's dim[4], as nibabel reads it."""
+    labels = np.zeros((6, 6, 6, 5), np.uint8)
+    labels[1:3, 1:3, 1:3] = 1
+    nib.save(nib.Nifti1Image(labels, np.eye(4)), tmp_path / "ts.nii.gz")
+    count = int(nib.load(tmp_path / "ts.nii.gz").header["dim"][4])
+    p = subprocess.run([sys.executable, "-m", "isoflow", command[0], "ts.nii.gz", *command[1:]],
+                       capture_output=True, text=True, cwd=tmp_path)
+    assert p.returncode == 2 and p.stdout == "" and p.stderr.count("\n") == 1, p.stderr
+    assert (f"(a time series of {count} time points along its 4th axis, NIfTI's dim[4], read as x, y, z, t): "
+            "read one time point with read_labels(path, time=0)") in p.stderr, p.stderr
+    assert not (tmp_path / "s.glb").exists()
+
 @pytest.mark.parametrize("command", [["surface", "-o", "s.ply"], ["info", "--labels"], ["flow", "--steps", "1"]])
 def test_a_4d_store_is_called_what_its_axes_metadata_names_it(tmp_path, command):
     """A 4D volume refused by a command that takes 3D was called "a 4th
@@ -1873,17 +1889,15 @@ def test_a_4d_store_is_called_what_its_axes_metadata_names_it(tmp_path, command)
     stored[2:5, 2:5, 2:4] = 1
     zarr.create_array(str(tmp_path / "c.zarr"), data=stored, dimension_names=list("xyzc"))
     zarr.create_array(str(tmp_path / "u.zarr"), data=stored)
-    # the refusal's words with the count (surface, flow) and without it (the label table's), one entry's name
-    said = {"ts.ome.zarr": ("a time series of 3 time points along its 4th axis 't'",
-                            "a time series of time points along its 4th axis 't'", "time point"),
-            "c.zarr": ("3 channels along its 4th axis 'c'", "channels along its 4th axis 'c'", "channel"),
-            "u.zarr": ("a 4th axis of 3 entries, time points or channels", "a 4th axis of time points or channels",
-                       "entry")}
-    for name, (counted, uncounted, entry) in said.items():
+    # the refusal's words with the count (the label table's too: it said "of time points"), one entry's name
+    said = {"ts.ome.zarr": ("a time series of 3 time points along its 4th axis 't'", "time point"),
+            "c.zarr": ("3 channels along its 4th axis 'c'", "channel"),
+            "u.zarr": ("a 4th axis of 3 entries, time points or channels", "entry")}
+    for name, (counted, entry) in said.items():
         p = subprocess.run([sys.executable, "-m", "isoflow", command[0], name, *command[1:]],
                            capture_output=True, text=True, cwd=tmp_path)
         assert p.returncode == 2 and p.stderr.count("\n") == 1 and "Traceback" not in p.stderr, p.stderr
-        words = (f"({uncounted}, read as x, y, z, t): read one {entry} with read_labels" if command[0] == "info" else
+        words = (f"({counted}, read as x, y, z, t): read one {entry} with read_labels" if command[0] == "info" else
                  f"this one is 4D, shape 8x7x6x3 ({counted}, read as x, y, z, t); save one {entry} as 3D")
         assert words in p.stderr, p.stderr
         assert ("time series" in p.stderr) == (name == "ts.ome.zarr"), p.stderr

@@ -279,8 +279,8 @@ def test_a_4d_label_image_is_told_how_to_take_one_time_point(tmp_path):
         proc = run("info", name, "--labels", cwd=tmp_path)
         assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
         # the OME-Zarr image names its 4th axis 't': a time series; the others say no name
-        what = ("a time series of time points along its 4th axis 't'" if name.endswith(".ome.zarr") else
-                "a 4th axis of time points or channels")
+        what = (f"a time series of {image.shape[3]} time points along its 4th axis 't'" if name.endswith(".ome.zarr")
+                else f"a 4th axis of {image.shape[3]} entries, time points or channels")
         assert f"this array is 4D with shape (5, 4, 3, 2) ({what}, read as x, y, z, t)" in proc.stderr, proc.stderr
         (tmp_path / "t0.npz").unlink(missing_ok=True)
         command = proc.stderr.split("give that: ", 1)[1].strip()

@@ -553,7 +553,7 @@ def read_labels(path: str | os.PathLike, *, time: int | np.integer | None = None
     arr = np.asarray(raw.array)
     if arr.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a label image is read in 3D or 2D, this array is {arr.ndim}D with shape "
-                           f"{arr.shape}" + (one_time_point_labels(path) if arr.ndim == 4 else ""))
+                           f"{arr.shape}" + (one_time_point_labels(path, arr.shape[-1]) if arr.ndim == 4 else ""))
     if arr.dtype.kind == "f":
         try:
             arr = as_labels(arr, fill=raw.fill)

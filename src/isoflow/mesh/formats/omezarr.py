@@ -896,7 +896,7 @@ class LabelSlabs:
             # as a file's: no label table is 4D, whether read whole or by blocks
             raise IsoflowError(f"{self.where}: a label image is read in 3D or 2D, this array is {array.ndim}D "
                                f"with shape {tuple(array.shape)}"
-                               + (one_time_point_labels(self.where) if array.ndim == 4 else ""))
+                               + (one_time_point_labels(self.where, int(array.shape[-1])) if array.ndim == 4 else ""))
         if store.multiscale is None and len(xyz) != 3:
             raise IsoflowError(f"{self.where}: a label table of a .zarr store (read block by block) needs a 3D "
                                f"volume, this array is {array.ndim}D" + ("; a 2D table reads the image whole "
@@ -905,7 +905,7 @@ class LabelSlabs:
         if len(self.xyz) == 4:
             shape = tuple(int(array.shape[i]) for i in self.xyz)
             raise IsoflowError(f"{self.where}: a label image is read in 3D or 2D, this array is 4D with shape "
-                               f"{shape}" + one_time_point_labels(self.where))
+                               f"{shape}" + one_time_point_labels(self.where, shape[-1]))
         if len(self.xyz) != 3:
             names = None if store.multiscale is None else axis_names(store.multiscale, array.ndim, self.where)
             raise IsoflowError(f"{self.where}: a label table of a .zarr store (read block by block) needs a 3D "

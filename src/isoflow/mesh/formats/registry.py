@@ -730,22 +730,23 @@ def fourth_axis_words(path: str | os.PathLike, count: int | None = None) -> tupl
     return f"a 4th axis of {count} entries, time points or channels", "entry"
 
 
-def one_time_point_labels(path: str | os.PathLike) -> str:
+def one_time_point_labels(path: str | os.PathLike, count: int | None = None) -> str:
     """The end of the refusal of a 4D label image (read as x, y, z, t; its
-    4th axis what :func:`fourth_axis_words` says): how to take one entry of
-    it, in Python and as a 3D file that every command reads.
+    4th axis what :func:`fourth_axis_words` says, of ``count`` entries):
+    how to take one entry of it, in Python and as a 3D file that every
+    command reads.
 
     Examples
     --------
-    >>> print(one_time_point_labels("cells.zarr"))  # doctest: +NORMALIZE_WHITESPACE
-     (a 4th axis of time points or channels, read as x, y, z, t): read one entry with read_labels(path, time=0),
-     or save it as 3D and give that: python -c 'import isoflow; isoflow.write_labels(isoflow.read_labels("cells.zarr", time=0),
-     "t0.npz")'
+    >>> print(one_time_point_labels("cells.zarr", 5))  # doctest: +NORMALIZE_WHITESPACE
+     (a 4th axis of 5 entries, time points or channels, read as x, y, z, t): read one entry with read_labels(path,
+     time=0), or save it as 3D and give that: python -c 'import isoflow;
+     isoflow.write_labels(isoflow.read_labels("cells.zarr", time=0), "t0.npz")'
     """
     import json
     import shlex
 
-    what, entry = fourth_axis_words(path)
+    what, entry = fourth_axis_words(path, count)
     code = f'import isoflow; isoflow.write_labels(isoflow.read_labels({json.dumps(str(path))}, time=0), "t0.npz")'
     return (f" ({what}, read as x, y, z, t): read one {entry} with read_labels(path, "
             f"time=0), or save it as 3D and give that: python -c {shlex.quote(code)}")
