@@ -2126,3 +2126,35 @@ def test_a_segmentation_named_without_or_past_its_labels_group_is_offered_by_nam
                           capture_output=True, text=True)
     assert done.returncode == 0 and [r["voxels"] for r in json.loads(done.stdout)["labels"]] == [
         np.count_nonzero(segmentation == v) for v in np.unique(segmentation) if v]
+
+
+def test_every_line_of_surface_labels_names_its_directory_as_dir_slash(tmp_path):
+    """``surface --labels --ascii --suffix .stl -o d2`` (d2 a directory)
+    was refused naming ``d2``, and a run's float64 warning named ``out``,
+    where the run's summary and its other lines name the directory of a
+    file per label ``d2/``, as ``-o DIR/`` is written. From the shell each
+    names it DIR/, however -o gave it."""
+    import isoflow
+
+    isoflow.write_labels(boxes([2, 3]), tmp_path / "lab.npz", pitch=1e-9, origin=(1e6, 0.0, 0.0))
+    (tmp_path / "d2").mkdir()
+
+    def surface(*args):
+        return subprocess.run([sys.executable, "-m", "isoflow", "surface", "lab.npz", "--labels", *args],
+                              capture_output=True, text=True, cwd=tmp_path)
+
+    for given in ("d2", "d2/", "new/"):
+        p = surface("--ascii", "--suffix", ".stl", "-o", given)
+        assert p.returncode == 2 and p.stderr.splitlines() == [
+            f"isoflow surface: error: {given.rstrip('/')}/: --ascii applies to .ply files only, not --suffix .stl"]
+    p = surface("-o", "d2")
+    assert p.returncode == 2 and p.stderr.startswith("isoflow surface: error: d2/: a file per label needs --suffix")
+    assert not (tmp_path / "new").exists() and not any((tmp_path / "d2").iterdir())
+    p = surface("-o", "d2", "--suffix", ".ply")
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.startswith("d2/ (2 .ply files): 2 labels"), p.stdout
+    warned = [line for line in p.stderr.splitlines() if "float64 holds the voxel corners" in line]
+    assert len(warned) == 1 and warned[0].startswith("isoflow surface: warning: d2/: float64 holds"), p.stderr
+    for k in (1, 2):  # a box each: a closed surface, V - E + F = 2
+        mesh = trimesh.load(tmp_path / "d2" / f"label_{k}.ply", process=False)
+        assert mesh.is_watertight and mesh.euler_number == 2

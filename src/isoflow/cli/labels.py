@@ -773,14 +773,15 @@ def surface_outputs(args: argparse.Namespace):
     out = str(args.output)
     if out.endswith(("/", "\\")) or Path(out).is_dir():
         refuse_suffixed_directory(out, args.suffix)
+        named = f"{Path(out)}/"  # a directory of a file per label is named DIR/, as every line of the run names it
         suffix = (args.suffix or "").lower()
         suffix = suffix if suffix.startswith(".") or not suffix else "." + suffix
         if suffix not in SURFACE_SUFFIXES:
             given = f", not {args.suffix}" if args.suffix else ""
-            raise IsoflowError(f"{out}: a file per label needs --suffix {'|'.join(SURFACE_SUFFIXES)}{given}")
+            raise IsoflowError(f"{named}: a file per label needs --suffix {'|'.join(SURFACE_SUFFIXES)}{given}")
         directory = Path(out)
         if not directory.is_dir() and (directory.exists() or directory.is_symlink()):  # mkdir would fail, after the work
-            raise IsoflowError(f"{out}: exists and is not a directory; give a new or existing directory for a file per label")
+            raise IsoflowError(f"{named}: exists and is not a directory; give a new or existing directory for a file per label")
         if not directory.is_dir():
             check_writable_dir(directory.parent, f"the directory {directory.name}")
         return "dir", directory, suffix
@@ -851,7 +852,7 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
         raise IsoflowError(f"{target[1]}: --ascii and --triangulate shape the files of -o DIR/; a .glb holds "
                            "triangles in binary")
     if args.ascii and target[2] != ".ply":
-        raise IsoflowError(f"{target[1]}: --ascii applies to .ply files only, not --suffix {target[2]}")
+        raise IsoflowError(f"{target[1]}/: --ascii applies to .ply files only, not --suffix {target[2]}")
     if target[0] == "glb":
         return surface_labels(args, target)
     with label_directory(target[1]):
@@ -943,7 +944,7 @@ def surface_labels(args: argparse.Namespace, target) -> int:
     where = target[1] if target[0] == "glb" else f"{target[1]}/ ({counted(len(meshes), target[2] + ' file')})"
     print(terminal_text(f"{where}: {counted(len(meshes), 'label')}, {faces}, one closed surface mesh per label"
                         + ("" if args.no_check else ", each read back by trimesh as isoflow counts it" if not problems else "")))
-    moved = float64_move_note(target[1], corners)
+    moved = float64_move_note(target[1] if target[0] == "glb" else f"{target[1]}/", corners)
     if moved:  # every file's corners moved by float64 itself
         print(terminal_text(f"isoflow surface: warning: {moved}"), file=sys.stderr)
     for line in problems:
