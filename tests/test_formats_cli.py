@@ -373,7 +373,7 @@ def test_metadata_a_format_cannot_keep_is_one_warning_line(tmp_path, capsys):
     isoflow.write_volume(isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=0.5), tmp_path / "v.npz")
     assert main(["flow", str(tmp_path / "v.npz"), "--out", str(tmp_path / "o"), "--volumes", "vox", "--steps", "1"]) == 0
     err = capsys.readouterr().err.strip().splitlines()
-    assert err and all(line.startswith("isoflow flow: warning: ") and "MagicaVoxel keeps no voxel size" in line
+    assert err and all(line.startswith("isoflow flow: warning: ") and "MagicaVoxel keeps no voxel size, origin or unit" in line
                        for line in err)
 
 
@@ -1103,7 +1103,8 @@ def test_writing_names_the_output_not_its_temporary_file(tmp_path, capsys):
     trimesh.creation.torus(2.0, 0.8).export(mesh)
     assert main(["voxelize", str(mesh), "--resolution", "12", "-o", str(tmp_path / "t.vox")]) == 0
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and f"{tmp_path / 't.vox'}: MagicaVoxel keeps no voxel size" in err[0] and "isoflow-tmp" not in err[0]
+    assert len(err) == 1 and "isoflow-tmp" not in err[0]
+    assert f"{tmp_path / 't.vox'}: MagicaVoxel keeps no voxel size, origin or unit" in err[0]
     fails(capsys, "voxelize", mesh, "--resolution", "300", "-o", tmp_path / "big.vox",
           words=(f"{tmp_path / 'big.vox'}: MagicaVoxel models are at most 256", "; voxelise it coarser (--resolution 256)"))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["t.stl", "t.vox"]  # nothing else left
@@ -1172,13 +1173,32 @@ def test_flow_force_replaces_step_volumes_of_any_suffix_and_warns_once(tmp_path,
     (out / "step_notes.txt").write_text("mine")  # not a step file: kept
     assert main(["flow", str(tmp_path / "small.npz"), "--out", str(out), "--force", "--volumes", "vox"]) == 0
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"isoflow flow: warning: {out}/step_000.vox: MagicaVoxel keeps no voxel size or origin; pitch [1, 1, 1] "
-                   "and origin [1, 2, 3] are not written"], err
+    assert err == [f"isoflow flow: warning: {out}/step_000.vox: MagicaVoxel keeps no voxel size, origin or unit; "
+                   "origin [1, 2, 3] is not written (read back as voxel size 1, origin 0)"], err
     steps = sorted(p.name for p in out.glob("step_*"))
     plys = sorted(p.name for p in out.glob("step_*.ply"))
     assert steps == sorted([*plys, *(n.replace(".ply", ".vox") for n in plys), "step_notes.txt"])
     run(capsys, "flow", tmp_path / "small.npz", "--out", out, "--force")  # no volumes now: none left
     assert sorted(p.name for p in out.glob("step_*")) == sorted([*plys, "step_notes.txt"])
+
+
+@pytest.mark.parametrize("suffix", [".vox", ".png"])
+def test_a_format_without_placement_warns_only_of_what_reads_back_otherwise(tmp_path, suffix):
+    """A .vox or .png reads back as voxel size 1 from 0: a pitch of 1 is
+    kept and not named among what is lost (MagicaVoxel's warning named
+    "pitch [1, 1, 1]"); an origin is; at pitch 1 and origin 0 nothing is
+    said. What is said lost is what the file, read back by isoflow, lacks."""
+    shape = (3, 3, 3) if suffix == ".vox" else (3, 3)
+    placed = isoflow.DigitalObject(np.ones(shape, bool), origin=(4.0,) * len(shape))
+    with pytest.warns(isoflow.IsoflowWarning) as said:
+        isoflow.write_volume(placed, tmp_path / f"a{suffix}")
+    text = " ".join(str(w.message) for w in said)
+    back = isoflow.read_volume(tmp_path / f"a{suffix}")
+    assert (back.spacing == 1).all() and (back.world(np.zeros(len(shape))) == 0).all()  # as the warning says
+    assert f"origin {[4] * len(shape)}".replace(" ", "") in text.replace(" ", "") and "pitch" not in text, text
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        isoflow.write_volume(isoflow.DigitalObject(np.ones(shape, bool)), tmp_path / f"b{suffix}")
 
 
 def test_flow_refuses_an_empty_volume_suffix(tmp_path, capsys):

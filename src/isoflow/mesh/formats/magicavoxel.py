@@ -20,10 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...digital.frames import frame_text
 from ...digital.lattice import DigitalObject
-from ...errors import IsoflowError, coordinates
-from .registry import RawVolume, note, placement, reading
+from ...errors import IsoflowError
+from .registry import RawVolume, note, placement_lost, reading
 
 MAX_SIDE = 256
 VERSION = 150
@@ -107,11 +106,11 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
     if max(obj.volume.shape, default=0) > MAX_SIDE:
         raise ModelTooLarge(f"{path}: MagicaVoxel models are at most {MAX_SIDE} voxels a side, this object is "
                             f"{'x'.join(map(str, obj.volume.shape))}")
-    spacing, corner = placement(obj)
-    if (spacing != 1).any() or corner.any() or unit is not None or space is not None:
-        note(f"{path}: MagicaVoxel keeps no voxel size or origin; pitch {coordinates(spacing)} "
-             f"and origin {coordinates(corner, step=spacing)}{'' if unit is None else ' in ' + unit}"
-             f"{'' if space is None else ', ' + frame_text(space) + ','} are not written")
+    # only what reads back otherwise (voxel size 1 from 0): a pitch of 1 is kept, as a PNG's is
+    lost = placement_lost(obj, unit, space)
+    if lost:
+        note(f"{path}: MagicaVoxel keeps no voxel size, origin or unit; {' and '.join(lost)} "
+             f"{'are' if len(lost) > 1 else 'is'} not written (read back as voxel size 1, origin 0)")
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,

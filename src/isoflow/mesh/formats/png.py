@@ -31,9 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ...digital.frames import frame_text
 from ...digital.lattice import DigitalObject
-from ...errors import IsoflowError, coordinates
+from ...errors import IsoflowError
 from .registry import (
     LabelVolume,
     RawVolume,
@@ -42,7 +41,7 @@ from .registry import (
     colours_refused,
     import_library,
     note,
-    placement,
+    placement_lost,
     reading,
     refuse_empty,
 )
@@ -119,12 +118,7 @@ def check(path: Path, obj: DigitalObject | LabelVolume, dataset: str | None = No
         raise IsoflowError(f"{path}: a PNG holds a 2D image, this object is {obj.ndim}D; write .tif, .nii.gz, "
                            ".nrrd, .h5 or .npz, which hold 3D")
     refuse_empty(path, obj.volume.shape, "PNG")
-    spacing, corner = placement(obj)
-    # said where what is read back differs: a pixel size not 1, an origin not 0, a unit
-    lost = ([f"pitch {coordinates(spacing)}"] if (spacing != 1).any() else []) + (
-        [f"origin {coordinates(corner, step=spacing)}"] if corner.any() else []) + (
-        [f"unit {unit}"] if unit is not None else []) + (
-        [frame_text(space)] if space is not None else [])
+    lost = placement_lost(obj, unit, space)  # said where what is read back differs
     if lost:
         note(f"{path}: PNG keeps no pixel size, origin or unit; {' and '.join(lost)} "
              f"{'are' if len(lost) > 1 else 'is'} not written (read back as pixel size 1, origin 0)")

@@ -32,7 +32,7 @@ import numpy as np
 from ...digital.frames import frame_text
 from ...digital.lattice import DigitalObject
 from ...digital.units import LENGTH_UNITS, length_unit, unit_factor
-from ...errors import IsoflowError, given_text, number_text, warn, with_article
+from ...errors import IsoflowError, coordinates, given_text, number_text, warn, with_article
 from ...scale.chunks import fourth_axis_name, spatial_axes, split_store
 
 #: the extra that brings every format library (pip install 'isoflow[formats]')
@@ -533,6 +533,41 @@ def placement(obj: DigitalObject) -> tuple[np.ndarray, np.ndarray]:
     corner) of ``obj``: what formats without a lattice offset or parity
     store, so that every voxel lands where it was."""
     return obj.spacing, obj.world(np.zeros(obj.ndim))
+
+
+def placement_lost(obj: DigitalObject, unit: str | None = None, space: str | None = None) -> list[str]:
+    """What of ``obj``'s placement a format that keeps none (PNG,
+    MagicaVoxel: read back as voxel size 1 from 0) drops, each as a
+    warning names it: a pitch other than 1, an origin other than 0, the
+    unit, the anatomical frame. Empty where the file reads back as placed.
+
+    Parameters
+    ----------
+    obj : DigitalObject
+        The object to be written.
+    unit : str or None
+        The length unit of its pitch and origin.
+    space : str or None
+        Its anatomical frame.
+
+    Returns
+    -------
+    list of str
+        ``["pitch [0.5, 0.5]", "origin [1, 2]", "unit mm", ...]``, in that
+        order, each where it is lost.
+
+    Examples
+    --------
+    >>> placement_lost(DigitalObject(np.ones((2, 2, 2), bool), origin=(1.0, 2.0, 3.0)))
+    ['origin [1, 2, 3]']
+    >>> placement_lost(DigitalObject(np.ones((2, 2), bool), pitch=0.5), unit="mm")
+    ['pitch [0.5, 0.5]', 'unit mm']
+    """
+    spacing, corner = placement(obj)
+    return ([f"pitch {coordinates(spacing)}"] if (spacing != 1).any() else []) + (
+        [f"origin {coordinates(corner, step=spacing)}"] if corner.any() else []) + (
+        [f"unit {unit}"] if unit is not None else []) + (
+        [frame_text(space)] if space is not None else [])
 
 
 def refuse_empty(path: Path, shape: tuple[int, ...], fmt: str) -> None:
