@@ -892,7 +892,9 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] | None
         Double the resolution until the Betti numbers of the last two agree,
         within ``max_resolution``, ``time_limit`` (seconds) and the memory;
         not for a self-intersecting mesh, nor for a non-orientable one with
-        nothing to compare (no inside: the stop ``"no_inside"``).
+        nothing to compare (no inside: the stop ``"no_inside"``); where
+        the voxels join solids that touch and the last two grids read the
+        solid so joined, no further (the stop ``"touching"``).
     max_resolution : int
         The doubling stops before a resolution beyond this (the verdict's
         ``stop`` says so); it caps only the doubling: ``resolutions`` past
