@@ -314,6 +314,102 @@ def test_bodies_closer_than_a_voxel_still_step_26_connected(tmp_path):
     assert d["stop"] is None
 
 
+#: four unit boxes in a ring, each on a common edge with the next (z from 0 to 1)
+RING = [[[0, 0, 0], [1, 1, 1]], [[1, 1, 0], [2, 2, 1]], [[0, 2, 0], [1, 3, 1]], [[-1, 1, 0], [0, 2, 1]]]
+
+
+def joined_betti(bodies) -> list[int]:
+    """The Betti numbers of manifold3d's ``bodies`` glued where they touch
+    (share a corner position): b0 the components of the graph of touching
+    pairs, b1 the bodies' genera plus its cycles (each contact here a
+    point or an edge, one arc of the graph), b2 0."""
+    corners = [{tuple(p) for p in np.round(b.to_mesh().vert_properties[:, :3], 9).tolist()} for b in bodies]
+    pairs = [(i, j) for i in range(len(bodies)) for j in range(i) if corners[i] & corners[j]]
+    parent = list(range(len(bodies)))
+
+    def root(i):
+        while parent[i] != i:
+            i = parent[i]
+        return i
+
+    for i, j in pairs:
+        parent[root(i)] = root(j)
+    b0 = len({root(i) for i in range(len(bodies))})
+    return [b0, sum(b.genus() for b in bodies) + len(pairs) - len(bodies) + b0, 0]
+
+
+@pytest.mark.parametrize("option, voxels", [(["--connectivity", "26"], "26-connected voxels"),
+                                            (["--fill", "flood"], "a flood fill's shell voxels")])
+def test_solids_touching_in_a_ring_stop_stepping_once_settled(tmp_path, option, voxels):
+    """Four boxes in a ring, each on a common edge with the next: manifold3d
+    builds 4 bodies of genus 0; 26-connected voxels (and a flood fill's)
+    join them where they touch at every resolution, one component around
+    one tunnel, which no finer grid changes. The stepping doubled on to
+    1024 for that, every grid alike; it stops at the second grid and says
+    why."""
+    m3 = pytest.importorskip("manifold3d")
+    boxes_obj(tmp_path / "ring.obj", *RING)
+    mesh = trimesh.load(tmp_path / "ring.obj", force="mesh")
+    bodies = m3.Manifold(m3.Mesh(mesh.vertices.astype(np.float32), mesh.faces.astype(np.uint32))).decompose()
+    assert [b.genus() for b in bodies] == [0, 0, 0, 0]
+    expected = joined_betti(bodies)
+    assert expected == [mesh.body_count, 1, 0] == [1, 1, 0]
+    edges = int((np.unique(mesh.edges_sorted, axis=0, return_counts=True)[1] > 2).sum())
+    assert edges == 4
+    run = [sys.executable, "-m", "isoflow", "genus", str(tmp_path / "ring.obj"), *option]
+    r = subprocess.run([*run, "--json"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert [e["resolution"] for e in d["digital"]] == [64, 128]
+    assert [e["betti"] for e in d["digital"]] == [expected] * 2
+    assert (d["solid"]["bodies"], d["solid"]["genus"], d["bodies"]) == (len(bodies), 0, len(bodies))
+    assert d["stop"]["kind"] == "touching" and d["stop"]["resolution"] == 128
+    clause = f"stopped at 128: the solids touch along {edges} edges, which {voxels} join at any resolution"
+    assert clause in d["verdict"]
+    text = subprocess.run(run, capture_output=True, text=True)
+    assert text.returncode == 0, text.stderr
+    assert clause in text.stdout
+    assert [line.split()[1] for line in text.stdout.splitlines() if line.lstrip().startswith("digital")] == ["64", "128"]
+
+
+@pytest.mark.parametrize("connectivity", ["6", "26"])
+def test_solids_close_but_not_touching_still_step_until_parted(tmp_path, connectivity):
+    """Two unit boxes 0.01 apart touch nowhere (trimesh: two bodies, no
+    shared corner): coarse grids join them across the gap, finer ones
+    part them, so the stepping goes on until two grids agree on 2."""
+    boxes_obj(tmp_path / "gap.obj", [[0, 0, 0], [1, 1, 1]], [[1.01, 0, 0], [2.01, 1, 1]])
+    mesh = trimesh.load(tmp_path / "gap.obj", force="mesh")
+    assert (mesh.body_count, len(mesh.vertices)) == (2, 16)
+    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "gap.obj"), "--connectivity",
+                        connectivity, "--json"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert d["digital"][0]["betti"][0] == 1  # the gap closed at 64 (a voxel of 0.03)
+    assert len(d["digital"]) > 2 and [e["betti"] for e in d["digital"][-2:]] == [[mesh.body_count, 0, 0]] * 2
+    assert (d["stop"], d["kind"]) == (None, "agree")
+
+
+def test_touching_ring_beside_a_close_box_steps_until_the_gap_parts(tmp_path):
+    """The ring of boxes on common edges and a fifth box 0.05 off the side
+    of one, read 26-connected: the ring stays one component around a
+    tunnel at every grid, the gap closes on coarse grids only, so the
+    stepping goes on past grids that join the fifth box, until two grids
+    part it (2 components, trimesh's body_count), then stops there."""
+    m3 = pytest.importorskip("manifold3d")
+    boxes_obj(tmp_path / "ring_gap.obj", *RING, [[0, -1.05, 0], [1, -0.05, 1]])
+    mesh = trimesh.load(tmp_path / "ring_gap.obj", force="mesh")
+    bodies = m3.Manifold(m3.Mesh(mesh.vertices.astype(np.float32), mesh.faces.astype(np.uint32))).decompose()
+    expected = joined_betti(bodies)
+    assert expected == [mesh.body_count, 1, 0] == [2, 1, 0]
+    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "ring_gap.obj"), "--resolution", "16",
+                        "32", "--connectivity", "26", "--json"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert d["digital"][0]["betti"] == [1, 1, 0]  # the gap closed at 16 (a voxel of 0.25)
+    assert [e["betti"] for e in d["digital"][-2:]] == [expected] * 2
+    assert d["stop"]["kind"] == "touching" and d["stop"]["resolution"] == d["digital"][-1]["resolution"]
+
+
 def test_crossing_components_facing_opposite_ways_are_no_union(tmp_path):
     """A ball crossing an inside-out ball: by the nonzero rule the solid is
     each ball less the other (the lens they share has winding 0), which

@@ -633,7 +633,8 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
                   step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
                   target: int | None = None, progress=None, on_resolution=None,
                   strict: bool = False, fill: Fill = "winding", bodies: int | None = None,
-                  t_junctions: bool = True, joined: int | None = None) -> tuple[list, Stop | None]:
+                  t_junctions: bool = True, joined: int | None = None,
+                  touching: list | None = None) -> tuple[list, Stop | None]:
     """Digital topology of the voxelised solid at ``resolutions`` and then,
     while ``step`` and the Betti numbers of the last two differ (or agree on
     a genus other than ``target``, or on components other than ``bodies``:
@@ -653,7 +654,10 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
     (:func:`~isoflow.mesh.voxelize.voxelize` looks for none). ``joined``:
     the components the voxels keep at every resolution where they join
     bodies that touch (:func:`touch_joined_bodies`), settled on as
-    ``bodies`` is.
+    ``bodies`` is. ``touching``: the Betti numbers of the solids joined
+    where they touch (:func:`touch_joined_betti`), which the voxels keep at
+    every resolution: two grids that agree on them end the stepping (the
+    stop ``"touching"``), whatever the reference says.
     """
     import time
 
@@ -669,7 +673,7 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
         else:
             res, stop = next_resolution(out, target, step=step, max_resolution=max_resolution,
                                         time_limit=time_limit, elapsed=time.monotonic() - start, bodies=bodies,
-                                        joined=joined)
+                                        joined=joined, touching=touching)
             if res is None:
                 return out, stop
         weight = res**3
@@ -695,11 +699,12 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
 
 def next_resolution(done: list, target: int | None, *, step: bool, max_resolution: int, time_limit: float,
                     elapsed: float, bodies: int | None = None,
-                    joined: int | None = None) -> tuple[int | None, Stop | None]:
+                    joined: int | None = None, touching: list | None = None) -> tuple[int | None, Stop | None]:
     """The resolution to try after ``done`` (twice the last), or None with
     why not: the Betti numbers settled on ``target`` and, where given,
     ``bodies`` components, or ``joined``, those no grid parts (no
-    :class:`Stop`), or
+    :class:`Stop`), or settled on ``touching``, those of the solids joined
+    where they touch, which no grid changes (a Stop "touching"), or
     a limit (the time that ``elapsed`` seconds leave, the memory budget).
     ``max_resolution`` caps the doubling only: where the resolutions asked
     already pass it, they are what ended the stepping (a Stop "asked")."""
@@ -707,6 +712,10 @@ def next_resolution(done: list, target: int | None, *, step: bool, max_resolutio
     if stable and (target is None or done[-1]["genus"] == target) and (bodies is None or
                                                                        done[-1]["betti"][0] in (bodies, joined)):
         return None, None
+    if stable and touching is not None and list(done[-1]["betti"]) == list(touching):
+        # the voxels join the solids where they touch, and the last two grids
+        # are the joined solid: a finer grid joins them there alike
+        return None, Stop("touching", resolution=done[-1]["resolution"])
     if not step:
         return None, Stop("asked")
     last = done[-1]
@@ -883,7 +892,9 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] | None
         Double the resolution until the Betti numbers of the last two agree,
         within ``max_resolution``, ``time_limit`` (seconds) and the memory;
         not for a self-intersecting mesh, nor for a non-orientable one with
-        nothing to compare (no inside: the stop ``"no_inside"``).
+        nothing to compare (no inside: the stop ``"no_inside"``); where
+        the voxels join solids that touch and the last two grids read the
+        solid so joined, no further (the stop ``"touching"``).
     max_resolution : int
         The doubling stops before a resolution beyond this (the verdict's
         ``stop`` says so); it caps only the doubling: ``resolutions`` past
@@ -1008,13 +1019,14 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] | None
     # against, no finer grid settles what its winding number reads, and the
     # doubling only multiplies components (a Moebius band: hundreds at 1024)
     no_inside = bool(w["mesh"]["non_orientable"]) and target is None
+    joined = None if contacts is not None else touch_joined_bodies(w, f, connectivity, fill, bodies)
     try:  # with strict, a mesh that is not watertight is refused here
         digital, stop = digital_steps(
             *voxelised, resolutions, connectivity, step=step and not w["crossing_self"] and not no_inside,
             max_resolution=max_resolution,
             time_limit=time_limit, target=target, progress=progress, on_resolution=on_resolution,
-            strict=strict, fill=fill, bodies=bodies, t_junctions=t_junctions,
-            joined=None if contacts is not None else touch_joined_bodies(w, f, connectivity, fill, bodies))
+            strict=strict, fill=fill, bodies=bodies, t_junctions=t_junctions, joined=joined,
+            touching=None if joined is None else touch_joined_betti(w, f, joined))
     except IsoflowError as exc:
         raise exc.at(name) from None  # a refused grid keeps its command-line words
     if step and no_inside and stop is not None:
@@ -1415,6 +1427,65 @@ def touch_joined_bodies(w: dict, faces: np.ndarray, connectivity: int, fill: Fil
     index = index.reshape(faces.shape)
     groups = components(len(used), np.r_[index[:, 0], index[:, 1]], np.r_[index[:, 1], index[:, 2]])[0]
     return groups if groups < bodies else None
+
+
+def touch_joined_betti(w: dict, faces: np.ndarray, joined: int) -> list[int] | None:
+    """The Betti numbers of the solid whose bodies are joined where they
+    touch (what 26-connected voxels, or a flood fill's shell, read at every
+    resolution fine enough to part what does not touch), ``joined``
+    components (:func:`touch_joined_bodies`); None where the mesh does not
+    say them.
+
+    The sheets are the faces joined across edges of two faces; where they
+    are the solid's bodies (manifold3d's, without cavities), the union of
+    the closed bodies glued where they touch has the Euler characteristic
+    of the bodies apart (bodies less genus), less ``k - 1`` for each vertex
+    of ``k`` sheets and plus ``k - 1`` for each edge of ``k`` sheets. No
+    cavity is assumed: a joined solid that encloses one reads otherwise,
+    and the stepping goes on.
+
+    Parameters
+    ----------
+    w : dict
+        The witnesses (:func:`witnesses`), whose ``solid`` is read.
+    faces : numpy.ndarray
+        The faces (M, 3) the witnesses counted.
+    joined : int
+        The components (:func:`touch_joined_bodies`).
+
+    Returns
+    -------
+    list of int or None
+        ``[b0, b1, b2]``.
+
+    Examples
+    --------
+    Two tetrahedra on a common edge (vertices 0 and 1), one body each:
+
+    >>> f = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3],
+    ...               [0, 1, 4], [0, 5, 1], [0, 4, 5], [1, 5, 4]])
+    >>> touch_joined_betti({"solid": {"bodies": 2, "genus": 0, "cavities": 0}}, f, 1)
+    [1, 0, 0]
+    """
+    from ..scale.graphs import components
+
+    solid = w["solid"]
+    if "bodies" not in solid or solid.get("cavities") != 0 or len(faces) == 0:
+        return None
+    f = np.asarray(faces, dtype=np.int64)
+    sides = np.sort(np.stack([f, np.roll(f, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
+    edges, edge_of, uses = np.unique(sides, axis=0, return_inverse=True, return_counts=True)
+    edge_of = edge_of.ravel()  # the edge of each side (face * 3 + side)
+    order = np.argsort(edge_of, kind="stable")
+    two = order[uses[edge_of[order]] == 2].reshape(-1, 2) // 3  # the two faces of each edge of two faces
+    sheets, sheet = components(len(f), two[:, 0], two[:, 1])
+    if sheets != solid["bodies"]:
+        return None  # sheets that are not the bodies (a face between non-manifold edges only)
+    face_of = np.repeat(np.arange(len(f)), 3)
+    at_vertices = len(np.unique(np.c_[f.ravel(), sheet[face_of]], axis=0)) - len(np.unique(f))
+    at_edges = len(np.unique(np.c_[edge_of, sheet[face_of]], axis=0)) - len(edges)
+    chi = int(solid["bodies"]) - int(solid["genus"]) - at_vertices + at_edges
+    return [int(joined), int(joined) - chi, 0]
 
 
 def _corner_joined(w: dict, last: dict, bodies: int | None, fill: Fill) -> bool:

@@ -24,7 +24,7 @@ from .grid import rounding_words
 #: what the verdict says, first
 VerdictKind = Literal["agree", "disagree", "not_converged", "self_intersecting", "no_solid", "no_reference"]
 #: why the resolution stepping stopped before the Betti numbers settled
-StopKind = Literal["asked", "max_resolution", "time_limit", "memory", "no_inside"]
+StopKind = Literal["asked", "max_resolution", "time_limit", "memory", "no_inside", "touching"]
 #: the facts said after the verdict
 NoteKind = Literal["dropped_faces", "welded", "repeated_faces", "double_sided", "open", "inconsistent",
                    "nonmanifold_edges", "nonmanifold_vertices", "nested", "overlap", "self_intersecting",
@@ -45,7 +45,11 @@ class Stop:
     caps only the doubling; ``resolution`` is then the last one asked).
     A ``no_inside`` stop ends the stepping after the resolutions asked
     where a non-orientable component leaves nothing to compare with: no
-    finer grid settles what its winding number reads.
+    finer grid settles what its winding number reads. A ``touching`` stop
+    ends it at ``resolution``, the last tried, where the voxels join solids
+    that touch at a point or along an edge (26-connected ones, or a flood
+    fill's shell) and the last two grids read the solid so joined: no finer
+    grid parts them.
     """
 
     kind: StopKind
@@ -183,6 +187,8 @@ def stop_text(stop: Stop) -> str:
     'the time limit (0.5 s, --time-limit): 512 would end past it (about 0.46 s more)'
     >>> stop_text(Stop("no_inside"))
     'the resolutions asked: a non-orientable component has no inside, so no finer grid settles the digital rows'
+    >>> stop_text(Stop("touching", resolution=128))
+    'the solids touching at a point or along an edge, which the voxels join at any resolution (at 128)'
     """
     flag = option_flag(stop.option) if stop.option else ""
     if stop.kind == "asked":
@@ -191,6 +197,8 @@ def stop_text(stop: Stop) -> str:
         return "the resolutions asked"
     if stop.kind == "no_inside":
         return "the resolutions asked: a non-orientable component has no inside, so no finer grid settles the digital rows"
+    if stop.kind == "touching":
+        return f"the solids touching at a point or along an edge, which the voxels join at any resolution (at {stop.resolution})"
     if stop.kind == "max_resolution":
         return f"the largest resolution allowed ({stop.limit}, {flag})"
     if stop.kind == "time_limit":
@@ -210,9 +218,32 @@ def verdict_text(v: GenusVerdict) -> str:
     return head_text(v) + ("; " + "; ".join(notes) if notes else "")
 
 
+def touching_text(mesh: Mapping[str, Any], resolution: int | None, connectivity: int = 26) -> str:
+    """Why the stepping stopped at ``resolution`` where the solids touch
+    (a Stop "touching"), with where the ``mesh`` row shows them touching;
+    at ``connectivity`` 6 the voxels that join them are a flood fill's.
+
+    Examples
+    --------
+    >>> touching_text({"nonmanifold_edges": 4, "nonmanifold_vertices": 0, "shared_vertices": 0}, 128)
+    'stopped at 128: the solids touch along 4 edges, which 26-connected voxels join at any resolution'
+    >>> touching_text({"nonmanifold_edges": 0, "nonmanifold_vertices": 0, "shared_vertices": 3}, 64, 6)
+    "stopped at 64: the solids touch at 3 vertices, which a flood fill's shell voxels join at any resolution"
+    """
+    edges, points = mesh.get("nonmanifold_edges", 0), mesh.get("nonmanifold_vertices", 0)
+    if not edges and not points:
+        points = mesh.get("shared_vertices", 0)
+    where = " and ".join(([f"along {counted(edges, 'edge')}"] if edges else [])
+                         + ([f"at {counted(points, 'vertex', 'vertices')}"] if points else [])) or "at a point or along an edge"
+    voxels = "26-connected voxels" if connectivity == 26 else "a flood fill's shell voxels"
+    return f"stopped at {resolution}: the solids touch {where}, which {voxels} join at any resolution"
+
+
 def head_text(v: GenusVerdict) -> str:
     """What the verdict says first."""
     digital, stop = v.digital, (f"; stopped by {stop_text(v.stop)}" if v.stop else "")
+    if v.stop is not None and v.stop.kind == "touching":  # not a limit: the clause says where it stopped and why
+        stop = "; " + touching_text(v.mesh, v.stop.resolution, digital[-1]["connectivity"] if digital else 26)
     ref_name = "voxel genus" if v.reference_source == "voxels" else f"{v.reference_source} genus"
     if v.kind == "self_intersecting":
         return (f"self-intersecting: {_NOTE_WORDS['self_intersecting'](v.self_intersecting_faces)}, "
