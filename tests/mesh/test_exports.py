@@ -188,13 +188,13 @@ def test_readback_disagreement_exits_1_naming_the_file(tmp_path, monkeypatch):
 
 
 def test_readback_beyond_the_memory_budget_is_skipped_and_said(tmp_path, monkeypatch):
-    """The file is written; the read-back (an OBJ's asks 350 bytes a
-    triangle) is skipped with one note when it would not fit."""
+    """The file is written; the read-back (an OBJ's asks 380 bytes a line
+    of the file) is skipped with one note when it would not fit."""
     from isoflow.mesh import readback
     from isoflow.scale import memory
 
     v = np.ones((3, 3, 3), bool)
-    # meshing needs about 17 kB (16 B a lattice point, 300 a face), the read-back 38 kB (108 triangles);
+    # meshing needs about 17 kB (16 B a lattice point, 300 a face), the read-back 43 kB (113 lines);
     # the read-back's fixed part (its imports, 128 MiB) left out of a budget this small
     monkeypatch.setattr(readback, "READBACK_BYTES_FIXED", 0)
     monkeypatch.setattr(memory, "default_budget", lambda: 30_000)

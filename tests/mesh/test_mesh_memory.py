@@ -143,3 +143,107 @@ def test_a_budget_for_the_mesh_but_not_the_read_back_writes_the_mesh(tmp_path):
     code, err = surface_within(tmp_path, 64 << 10, str(tmp_path / "v.npy"), "-o", str(tmp_path / "w.ply"))
     assert code == 2 and len(err) == 1 and "the boundary mesh" in err[0] and "more than the budget" in err[0], err
     assert not (tmp_path / "w.ply").exists()
+
+
+# (suffix, options): every file `isoflow surface` writes and reads back, each
+# asked its own read-back estimate
+FORMATS = [(".ply", ()), (".ply", ("--triangulate",)), (".ply", ("--ascii",)), (".ply", ("--ascii", "--triangulate")),
+           (".stl", ()), (".obj", ()), (".obj", ("--triangulate",)), (".glb", ())]
+
+
+@pytest.mark.parametrize("suffix, options", FORMATS, ids=[s + "".join(o) for s, o in FORMATS])
+def test_readback_estimate_covers_what_the_readers_allocate(tmp_path, suffix, options):
+    # a 256^3 porous field's STL was estimated at 2.89 GB beside its mesh
+    # (250 bytes a triangle) where its read-back grew by 4.28 GB, an ASCII
+    # PLY's at 1.86 GB (150 a triangle, as a binary PLY) where it grew by
+    # 5.5 GB: a run passes the check and is killed. What the read-back
+    # allocates through NumPy and Python (tracemalloc: the readers' arrays,
+    # an ASCII parse's string and array a line; not the compiled passes' own,
+    # so a floor of the peak), its imports done before, is within the
+    # estimate less its fixed part (the imports)
+    import tracemalloc
+
+    from isoflow.digital.lattice import DigitalObject
+    from isoflow.mesh import readback
+    from isoflow.mesh.export import write_surface
+
+    volume = porous(40)
+    obj, mesh = DigitalObject(volume), boundary_mesh(volume)
+    comps = mesh.components()
+    path = tmp_path / f"p{suffix}"
+    write_surface(obj, path, 6, mesh=mesh, ascii="--ascii" in options, triangulate="--triangulate" in options,
+                  check=False)
+    assert readback.check_surface_file(path, mesh, obj, topology=False, components=comps)["agree"]  # imports done
+    tracemalloc.start()
+    try:
+        readback.check_surface_file(path, mesh, obj, topology=False, components=comps)
+        traced = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    lines = len(path.read_bytes().splitlines()) if "--ascii" in options or suffix == ".obj" else None
+    asked = readback_memory(mesh, suffix, lines) - readback.READBACK_BYTES_FIXED
+    assert asked >= traced, (asked, traced)
+
+
+@pytest.mark.parametrize("suffix, options, former", [(".stl", (), 250), (".ply", ("--ascii",), 150)], ids=["stl", "ascii"])
+def test_a_budget_below_the_read_back_skips_it(tmp_path, suffix, options, former):
+    # a budget between the former estimate (per triangle of every file of
+    # the suffix) and what the read-back takes ran it, to be killed for
+    # memory on a large mesh: the mesh is written and the check is skipped,
+    # said in one note
+    from isoflow.mesh.readback import READBACK_BYTES_FIXED, text_lines
+
+    volume = ball(10, 30)
+    np.save(tmp_path / "v.npy", volume)
+    mesh = boundary_mesh(volume)
+    triangles = 2 * len(mesh.faces)
+    probe = tmp_path / f"probe{suffix}"
+    code, err = surface_within(tmp_path, 1 << 40, str(tmp_path / "v.npy"), "-o", str(probe), *options)
+    assert code == 0, err
+    now = readback_memory(mesh, suffix, text_lines(probe))
+    assert now > READBACK_BYTES_FIXED + former * triangles
+    out = tmp_path / f"v{suffix}"
+    budget = READBACK_BYTES_FIXED + former * triangles + 1000
+    code, err = surface_within(tmp_path, budget * 10 // 9 + 1024, str(tmp_path / "v.npy"), "-o", str(out), *options)
+    assert code == 0, err
+    read = trimesh.load(out, process=False)
+    assert read.volume == pytest.approx(volume.sum())
+    assert len(err) == 1 and err[0].startswith(f"isoflow surface: note: {out}: not read back"), err
+
+
+def test_a_picture_beyond_the_budget_is_refused_up_front(tmp_path):
+    # --png draws the picture holding the mesh, with matplotlib's imports
+    # (a 256^3 ball's peak grew by 94 MB): a budget for the mesh alone drew
+    # it past the budget. Refused before any work in one line, nothing
+    # written; without --png the same budget writes the mesh
+    volume = ball(10, 30)
+    np.save(tmp_path / "v.npy", volume)
+    code, err = surface_within(tmp_path, 64 << 20, str(tmp_path / "v.npy"), "-o", str(tmp_path / "a.ply"),
+                               "--png", str(tmp_path / "a.png"))
+    assert code == 2 and len(err) == 1, err
+    assert "the boundary mesh" in err[0] and "and its picture needs about" in err[0] and "more than the budget" in err[0]
+    assert not (tmp_path / "a.ply").exists() and not (tmp_path / "a.png").exists()
+    code, err = surface_within(tmp_path, 64 << 20, str(tmp_path / "v.npy"), "-o", str(tmp_path / "a.ply"), "--no-check")
+    assert code == 0 and err == [] and trimesh.load(tmp_path / "a.ply").is_watertight
+
+
+def test_the_check_counts_an_ascii_write(tmp_path):
+    # an ASCII PLY's rows are written from float64 tables: a 256^3 porous
+    # field peaked 2.03 GB above the check where 1.76 GB (the binary PLY's
+    # estimate) was asked. A budget for the binary PLY alone writes it and
+    # refuses --ascii in one line, writing nothing
+    from isoflow.mesh.export import write_memory
+
+    volume = ball(10, 30)
+    np.save(tmp_path / "v.npy", volume)
+    hist = configuration_histogram(volume)
+    faces = len(boundary_mesh(volume).faces)
+    assert write_memory(faces, ".ply", ascii=True) >= 80 * faces  # the float64 table of a vertex a face, at the least
+    budget = mesh_memory(hist, mesh_method(volume)) + write_memory(faces, ".ply", ascii=True) // 2
+    available = budget * 10 // 9 + 1024
+    code, err = surface_within(tmp_path, available, str(tmp_path / "v.npy"), "-o", str(tmp_path / "a.ply"), "--no-check")
+    assert code == 0 and err == [], err
+    code, err = surface_within(tmp_path, available, str(tmp_path / "v.npy"), "-o", str(tmp_path / "b.ply"), "--ascii",
+                               "--no-check")
+    assert code == 2 and len(err) == 1 and "the boundary mesh" in err[0] and "more than the budget" in err[0], err
+    assert not (tmp_path / "b.ply").exists()

@@ -96,7 +96,7 @@ def surface_of(args: argparse.Namespace) -> int:
     # a placement no file holds: refused before any work
     corners = export.check_float64_corners(args.input, obj.origin, obj.spacing, obj.volume.shape)
     conn = args.connectivity or default_connectivity(3)
-    mesh = checked_mesh(args.input, obj, conn)
+    mesh = checked_mesh(args.input, obj, conn, out.suffix, ascii=args.ascii, picture=bool(args.png))
     comments = surface_comments(args.input, conn)
     # the mesh and its picture replaced together: a failure or a signal between them leaves both as they were,
     # and an interrupt's line names both. The mesh's lines on stdout are held until both are in place: a
@@ -153,16 +153,22 @@ def input_stem(name: str) -> str:
     return file[:-len(max(known, key=len))] if known else Path(file).stem or file
 
 
-def checked_mesh(name: str, obj, conn: int):
-    """The boundary mesh, refused up front when it would not fit in memory."""
+def checked_mesh(name: str, obj, conn: int, suffix: str = ".ply", *, ascii: bool = False, picture: bool = False):
+    """The boundary mesh, refused up front when it would not fit in memory
+    with the file of ``suffix`` (``ascii``: an ASCII PLY) and, with
+    ``picture``, its picture (drawn holding the mesh)."""
     from ..digital.configurations import configuration_histogram
     from ..digital.surface import boundary_faces, boundary_mesh, mesh_memory, mesh_method
+    from ..mesh.export import write_memory
+    from ..mesh.render import PICTURE_BYTES
     from ..scale.memory import check_fits
 
     hist = configuration_histogram(obj.volume)
+    faces = boundary_faces(hist)
     check_fits(
-        mesh_memory(hist, mesh_method(obj.volume)),  # the way boundary_mesh below takes
-        f"{name}: the boundary mesh ({boundary_faces(hist):,} faces)",
+        mesh_memory(hist, mesh_method(obj.volume))  # the way boundary_mesh below takes
+        + write_memory(faces, suffix, ascii=ascii) + (PICTURE_BYTES if picture else 0),
+        f"{name}: the boundary mesh ({faces:,} faces)" + (" and its picture" if picture else ""),
         hint="crop or coarsen the volume",
     )
     return boundary_mesh(obj.volume, conn)

@@ -71,6 +71,46 @@ POSITION_TOLERANCE = 1e-6
 #: the surface formats ``isoflow surface`` writes, by suffix
 SURFACE_SUFFIXES = (".ply", ".obj", ".stl", ".glb")
 
+#: what a writer holds beyond a binary PLY's, which
+#: :func:`isoflow.digital.surface.mesh_memory` counts: per face of the mesh,
+#: an ASCII PLY's rows as float64 tables (a 256^3 porous field of 5.8
+#: million faces peaked 460 MB above its binary PLY, 2.04 GB above the
+#: check where 1.76 GB was asked) and an OBJ's lines (of triangles: 271 MB
+#: above, 1.85 GB); an STL's records are made by trimesh, whose imports
+#: take 64 MB (a 256^3 ball's STL peaked 90 MB above the check, its
+#: estimate 75 MB). docs/surface.md, "Memory: the check before meshing"
+WRITE_BYTES_PER_FACE = {"ascii": 100, ".obj": 60}
+WRITE_BYTES_STL = 72 << 20
+
+
+def write_memory(faces: int, suffix: str, ascii: bool = False) -> int:
+    """Estimated bytes that writing a mesh of ``faces`` faces as ``suffix``
+    holds beyond a binary PLY's (what ``mesh_memory`` counts).
+
+    Parameters
+    ----------
+    faces : int
+        The mesh's faces (squares, before any triangulation).
+    suffix : str
+        The file's suffix.
+    ascii : bool
+        An ASCII PLY.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> write_memory(1000, ".ply"), write_memory(1000, ".ply", ascii=True), write_memory(1000, ".obj")
+    (0, 100000, 60000)
+    """
+    suffix = suffix.lower()
+    if suffix == ".stl":
+        return WRITE_BYTES_STL
+    key = "ascii" if ascii and suffix == ".ply" else suffix
+    return faces * WRITE_BYTES_PER_FACE.get(key, 0)
+
 
 def gamma_colours(gamma: np.ndarray, vertex_class: np.ndarray) -> np.ndarray:
     """RGB (uint8) of the vertex angle gamma (-4..4 eighths): blue for concave,

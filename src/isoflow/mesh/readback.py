@@ -17,12 +17,12 @@ gives: :func:`obj_as_trimesh_reads`; a GLB's trimesh reader is given
 the accessors the figures use: :func:`scene_nodes`); the figures are
 counted by their trimesh definitions in one compiled pass over its arrays
 (:mod:`isoflow.mesh.node_topology`), which sorts no edge. The read-back
-needs about 110 bytes per triangle of a PLY, 180 of an STL whose
-positions are welded (measured on the 4.9 million triangles of a 192^3
-porous field, the parse included) and 300 of an OBJ (measured on a ball
-of 850,000 triangles, where trimesh's parse needed 270); a file whose
-read-back would not fit in the memory budget is not read back, and the
-caller says so.
+needs about 100 bytes per triangle of a binary PLY, 70 of a GLB, 360 of
+an STL whose positions are welded, and per line of a text file 280 of an
+OBJ and 470 of an ASCII PLY (trimesh's parse holds a string and an array
+a line), measured on the 11.5 million triangles of a 256^3 porous field
+(docs/surface.md); a file whose read-back would not fit in the memory
+budget is not read back, and the caller says so.
 """
 
 from __future__ import annotations
@@ -148,21 +148,85 @@ def agreed_volume_words(read_units: float, voxels: int, spacing) -> str:
 
 #: peak bytes of the read-back: a fixed part (trimesh's and its readers'
 #: imports, which a run without the read-back never loads; docs/surface.md,
-#: "Memory: the check before meshing"), and per triangle, by suffix
-#: (measured on 4.9 million triangles: 107 for a PLY, 182 for a welded STL;
-#: on 850,000: 295 for an OBJ, whose text is read as arrays of its bytes;
-#: rounded up), and for the others
+#: "Memory: the check before meshing"), and per triangle of a binary file,
+#: by suffix (measured on the 11.5 million triangles of a 256^3 porous
+#: field: 99 for a PLY, 360 for an STL, whose positions are welded and its
+#: area summed, 69 for a GLB; the 250 asked of an STL fell short by 1.3 GB
+#: there), with about 10 % to spare and rounded up
 READBACK_BYTES_FIXED = 128 << 20
-READBACK_BYTES_PER_TRIANGLE = {".ply": 150, ".stl": 250, ".obj": 350}
-READBACK_BYTES_OTHER = 350
+READBACK_BYTES_PER_TRIANGLE = {".ply": 150, ".stl": 400, ".glb": 100}
+READBACK_BYTES_OTHER = 400
+#: and per line of a text file (a vertex or a face): an OBJ, read as
+#: arrays of its bytes (measured 271 to 275 there; 347 allocated on a
+#: 40^3 field of 51,000 triangles), and an ASCII PLY, which trimesh's parse
+#: holds as a string and an array a line (463 to 468: the 150 a triangle
+#: asked of every PLY was a third of it); the lines are the file's, so an
+#: OBJ or a PLY of triangles is asked for its own
+READBACK_BYTES_PER_LINE = {".obj": 380, ".ply": 520}
 
 
-def readback_memory(mesh, suffix: str = "") -> int:
-    """Estimated peak bytes of reading the mesh's file (of ``suffix``)
-    back with trimesh: the imports, and per triangle (two per quad and one
-    more per edge midpoint of a face)."""
+def readback_memory(mesh, suffix: str = "", lines: int | None = None) -> int:
+    """Estimated peak bytes of reading the mesh's file back with trimesh.
+
+    Parameters
+    ----------
+    mesh : QuadMesh
+        The mesh the file holds.
+    suffix : str
+        The file's suffix.
+    lines : int, optional
+        The lines of the file where it is text (an OBJ, an ASCII PLY:
+        :func:`text_lines`), whose read-back is counted per line; None:
+        binary (an OBJ's then counted as its vertices and triangles, the
+        most lines it may hold).
+
+    Returns
+    -------
+    int
+        The imports, and per triangle (two per quad and one more per edge
+        midpoint of a face) or per line of text.
+
+    Examples
+    --------
+    >>> from isoflow.digital.surface import boundary_mesh
+    >>> mesh = boundary_mesh(np.ones((2, 2, 2), bool))
+    >>> readback_memory(mesh, ".stl") - READBACK_BYTES_FIXED  # 24 squares, 48 triangles
+    19200
+    >>> readback_memory(mesh, ".ply", lines=26 + 24) - READBACK_BYTES_FIXED  # ASCII: a line a vertex, a face
+    26000
+    """
+    suffix = suffix.lower()
     triangles = 2 * len(mesh.faces) + int(np.count_nonzero(mesh.edge_midpoint >= 0))
-    return READBACK_BYTES_FIXED + triangles * READBACK_BYTES_PER_TRIANGLE.get(suffix.lower(), READBACK_BYTES_OTHER)
+    if suffix == ".obj" and lines is None:
+        lines = len(mesh.vertices) + triangles
+    if lines is not None and suffix in READBACK_BYTES_PER_LINE:
+        return READBACK_BYTES_FIXED + lines * READBACK_BYTES_PER_LINE[suffix]
+    return READBACK_BYTES_FIXED + triangles * READBACK_BYTES_PER_TRIANGLE.get(suffix, READBACK_BYTES_OTHER)
+
+
+def text_lines(path: str | os.PathLike) -> int | None:
+    """The lines of a text mesh file (an OBJ, an ASCII PLY), counted in
+    chunks of 16 MiB; None for a binary one (any other file).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> out = Path(tempfile.mkdtemp())
+    >>> (out / "a.obj").write_bytes(b"v 0 0 0\\nv 1 0 0\\nv 0 1 0\\nf 1 2 3\\n")
+    32
+    >>> text_lines(out / "a.obj"), text_lines(out / "a.stl")
+    (4, None)
+    """
+    path = Path(path)
+    with contextlib.suppress(OSError), open(path, "rb") as fh:
+        head = fh.read(1 << 12)
+        if path.suffix.lower() != ".obj" and not (path.suffix.lower() == ".ply" and b"\nformat ascii " in head):
+            return None
+        count = head.count(b"\n")
+        while chunk := fh.read(16 << 20):
+            count += chunk.count(b"\n")
+        return count
+    return None
 
 
 def isoflow_figures(mesh, obj, components: list | None = None) -> dict:
@@ -428,7 +492,8 @@ def check_surface_file(path, mesh, obj, *, topology: bool = True, components: li
     from ..scale.memory import default_budget, sized
 
     path = Path(path)
-    need, budget = readback_memory(mesh, path.suffix), default_budget()
+    # a text file's parse is counted per line of it: a file of triangles holds more lines than one of quads
+    need, budget = readback_memory(mesh, path.suffix, text_lines(staged(path))), default_budget()
     if need > budget:
         why = f"trimesh would need about {sized(need)}, more than the budget of {sized(budget)}"
         return {"isoflow": None, "trimesh": None, "agree": None, "problem": None, "skipped": why}
