@@ -103,6 +103,58 @@ def test_a_nifti_without_qform_or_sform_is_placed_by_method_1(tmp_path, capsys, 
     same_points(ply_vertices(tmp_path / "s.ply"), (ply_vertices(tmp_path / "n.ply") - 0.5) * pixdim)
 
 
+def bare_nifti(path, array, pixdim):
+    """A NIfTI-1 file of ``array`` with qform and sform codes 0 and the
+    voxel sizes ``pixdim`` as its header bytes hold them, negative ones too
+    (nib.save rewrites the forms from the image's affine, so the header is
+    written again over the saved one)."""
+    nib.save(nib.Nifti1Image(array, np.eye(4)), path)
+    header = nib.load(path).header.copy()
+    header.set_qform(None, code=0)
+    header.set_sform(None, code=0)
+    header["pixdim"][1:4] = pixdim
+    with open(path, "r+b") as fh:
+        header.write_to(fh)
+    raw = np.frombuffer(path.read_bytes()[76:108], "<f4").astype(np.float64)  # nifti1.h: float pixdim[8] at byte 76
+    assert raw[1:4].tolist() == list(pixdim)
+    return raw[1:4]
+
+
+@pytest.mark.parametrize("pixdim", [(-2.0, 1.5, 1.0), (2.0, -1.5, 1.0)])
+def test_a_negative_pixdim_of_a_nifti_without_forms_mirrors_its_axis(tmp_path, labels, pixdim):
+    """qform_code = sform_code = 0 and a negative pixdim: nibabel's header
+    check reads it as its magnitude as it loads the file, and isoflow took
+    that, so pixdim[1] = -2 read unmirrored (x = +2 i). The standard's
+    method 1, as nifti1_io reads the header, puts voxel i at i pixdim[1]:
+    the axis mirrored. Read from the shell: the voxel sizes positive (as
+    nibabel's zooms), the mirror in the placement, the mesh's corners at
+    method 1's places computed from the header's bytes; nibabel's affine
+    mirrors x the same way (its own x flip, the volume centred)."""
+    path = tmp_path / "bare.nii"
+    stored = bare_nifti(path, labels, pixdim)
+    img = nib.load(path)
+    r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--label", "3", "--json"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    report = json.loads(r.stdout)
+    assert report["pitch"] == [float(z) for z in img.header.get_zooms()] == [abs(p) for p in pixdim]
+    warned = r.stderr
+    r = subprocess.run([sys.executable, "-m", "isoflow", "surface", str(path), "--label", "3", "-o",
+                        str(tmp_path / "s.ply")], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    np.save(tmp_path / "label3.npy", labels == 3)
+    r = subprocess.run([sys.executable, "-m", "isoflow", "surface", str(tmp_path / "label3.npy"), "-o",
+                        str(tmp_path / "n.ply")], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    corners = ply_vertices(tmp_path / "n.ply") - 0.5  # voxel-corner index units: centres' indices - 0.5
+    same_points(ply_vertices(tmp_path / "s.ply"), corners * stored)
+    if pixdim[0] < 0:  # nibabel's affine, less the translation by which it centres the volume
+        linear = img.affine.copy()
+        linear[:3, 3] = 0
+        same_points(ply_vertices(tmp_path / "s.ply"), nib.affines.apply_affine(linear, corners))
+    assert "negative: that axis runs mirrored" in warned and len(warned.splitlines()) == 1
+
+
 def test_surface_tiff_stack_equals_npy_and_lands_in_micrometres(tmp_path, capsys, labels):
     mask = (labels == 3).transpose(2, 1, 0).astype(np.uint8)  # a z, y, x stack as tifffile holds it
     tifffile.imwrite(tmp_path / "stack.tif", mask, imagej=True, resolution=(1 / 0.5, 1 / 0.25),

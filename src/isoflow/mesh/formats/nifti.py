@@ -4,7 +4,8 @@ Axes: the data array's axes (i, j, k) are placed by the image's affine
 (nibabel's ``img.affine``: the sform, else the qform), which maps a voxel's
 *centre* index to world (scanner) coordinates, usually RAS+ millimetres;
 an image with neither (both codes 0) by the standard's method 1 (the
-voxel sizes alone, voxel 0 centred at 0: :func:`method_1_affine`), with a
+voxel sizes alone, voxel 0 centred at 0: :func:`method_1_affine`; a
+negative ``pixdim`` mirrors its axis, :func:`stored_pixdim`), with a
 warning.
 Both present (codes above 0) and placing the voxels apart: the sform,
 with a warning of how far the qform is from it (:func:`forms_disagree`).
@@ -108,9 +109,12 @@ def image_volume(img, where: str) -> RawVolume:
     # the standard's world of an sform or qform is RAS; method 1's voxel grid has no anatomical frame
     space: str | None = "RAS"
     if int(img.header["qform_code"]) == 0 and int(img.header["sform_code"]) == 0:
-        affine, space = method_1_affine(img.header.get_zooms()), None
+        steps = stored_pixdim(img)
+        affine, space = method_1_affine(steps), None
+        mirrored = [f"pixdim[{i}] {steps[i - 1]:g}" for i in range(1, len(steps) + 1) if steps[i - 1] < 0]
+        said = f"; {', '.join(mirrored)} negative: that axis runs mirrored (nibabel takes its magnitude)" if mirrored else ""
         note(f"{where}: no qform or sform (both codes 0): placed by the NIfTI standard's method 1, voxel (i, j, k) "
-             "at (i dx, j dy, k dz), not by nibabel's fallback affine (x mirrored, centred on 0)")
+             f"at (i dx, j dy, k dz), not by nibabel's fallback affine (x mirrored, centred on 0){said}")
     unit = length_unit(img.header.get_xyzt_units()[0])  # 'mm', 'micron', 'meter' or 'unknown' (none)
     forms_disagree(img.header, img.shape, where, unit)
     return placed_by_affine(data, affine, where, unit, space)
@@ -163,6 +167,48 @@ def forms_disagree(header, shape, where: str, unit: str | None) -> float:
          f"{unit or 'units'} apart; isoflow takes the sform, as nibabel and FSL do (a reader that prefers the "
          "qform shows the image elsewhere)")
     return apart
+
+
+def stored_pixdim(img) -> np.ndarray:
+    """The voxel sizes ``pixdim[1]``, ``pixdim[2]``, ``pixdim[3]`` of a
+    NIfTI image with their signs as the file stores them. nibabel's header
+    check turns a negative one into its magnitude as it loads the file,
+    but the standard's method 1 (:func:`method_1_affine`) places voxel i
+    at i pixdim[1], as the reference library nifti1_io reads it: a
+    negative size mirrors its axis. The header is read again from the
+    file, unchecked; an image held in memory keeps its header as set.
+
+    Parameters
+    ----------
+    img : nibabel.Nifti1Pair or nibabel.Nifti2Pair
+        The image (``Nifti1Image`` is one).
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, one size per spatial axis (up to 3): nibabel's zooms (a
+        size of 0 read as 1), negated where the file's is negative.
+
+    Examples
+    --------
+    >>> import nibabel
+    >>> img = nibabel.Nifti1Image(np.ones((2, 2, 2), np.uint8), np.diag([2.0, 1.5, 1, 1]))
+    >>> img.header["pixdim"][1] = -2.0
+    >>> stored_pixdim(img).tolist()
+    [-2.0, 1.5, 1.0]
+    """
+    header = img.header
+    steps = np.asarray(header.get_zooms(), np.float64)[:3]
+    raw = header
+    holder = img.file_map.get("header", img.file_map.get("image"))  # a .nii holds its header in "image"
+    if holder is not None and (holder.filename is not None or holder.fileobj is not None):
+        try:
+            with holder.get_prepare_fileobj(mode="rb") as fh:
+                raw = type(header).from_fileobj(fh, check=False)
+        except (OSError, ValueError):  # the file as loaded above: unreadable now, its checked header stands
+            raw = header
+    stored = np.asarray(raw["pixdim"], np.float64)[1:len(steps) + 1]
+    return np.where((stored < 0) & (steps > 0), -steps, steps)
 
 
 def method_1_affine(zooms) -> np.ndarray:
