@@ -1017,6 +1017,44 @@ def test_info_reads_a_utf16_point_list(tmp_path, encoding):
     assert report["euler_characteristic"] == 1
 
 
+@pytest.mark.parametrize("encoding", ["utf-16-le", "utf-16-be"])
+def test_info_reads_a_utf16_point_list_without_a_byte_order_mark(tmp_path, encoding):
+    """Some Windows tools save UTF-16 with no byte-order mark
+    (``open(p, "w", encoding="utf-16-le")``); such a point list was
+    refused as "binary data, not a text point list". Every other byte is
+    NUL beside ASCII digits, blanks and line ends: it is that text, read as
+    its UTF-8 is. Each point a voxel (``--points-are voxels``, the cube
+    [p, p + 1]): the count, box and centroid are numpy's of ``np.loadtxt``
+    of the same text in UTF-8."""
+    rng = np.random.default_rng(7)
+    points = np.unique(rng.integers(-20, 40, size=(60, 3)), axis=0)
+    text = "# x y z\r\n" + "".join(f"{x} {y}\t{z}\r\n" for x, y, z in points)
+    with open(tmp_path / "points.txt", "w", encoding=encoding, newline="") as fh:
+        fh.write(text)
+    assert b"\0" in (tmp_path / "points.txt").read_bytes()[:2] and not text.startswith("\ufeff")
+    (tmp_path / "utf8.txt").write_text(text, encoding="utf-8", newline="")
+    want = np.loadtxt(tmp_path / "utf8.txt", comments="#", dtype=np.int64, encoding="utf-8")
+    r = run("info", tmp_path / "points.txt", "--points-are", "voxels", "--json")
+    assert r.returncode == 0, r.stderr
+    report = json.loads(r.stdout)
+    assert report["voxels"] == len(np.unique(want, axis=0))
+    assert report["bbox"] == [*want.min(axis=0).tolist(), *(want.max(axis=0) + 1).tolist()]
+    assert np.allclose(report["centroid"], np.unique(want, axis=0).mean(axis=0) + 0.5)
+
+
+@pytest.mark.parametrize("data", [np.arange(1, 400, dtype="<u2").tobytes(),  # 16-bit data: high bytes not all NUL
+                                  np.array([0, 1, 1, 0, 10, 13] * 20, dtype="<u2").tobytes(),  # no ASCII digit
+                                  "# \u00b5m\n1 2 3\n".encode("utf-16-le")])  # not ASCII: not unambiguous
+def test_nul_bytes_that_are_not_ascii_utf16_stay_binary(tmp_path, data):
+    """Reading UTF-16 without its mark takes only text that cannot be
+    anything else: 16-bit data, or UTF-16 beyond ASCII, is refused as the
+    binary it may be, in one line, exit 2."""
+    (tmp_path / "p.txt").write_bytes(data)
+    r = run("info", tmp_path / "p.txt")
+    assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, r.stderr
+    assert "binary data, not a text point list" in r.stderr and "Traceback" not in r.stderr
+
+
 @pytest.mark.parametrize("index", ["", "index"])
 def test_info_reads_the_csv_pandas_writes_of_an_array_of_points(tmp_path, index):
     """``pd.DataFrame(points).to_csv("p.csv")`` names the columns 0, 1, 2

@@ -598,7 +598,8 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
     frame's index; ``,0,1,2`` for a frame of an array), that first column
     is the index, not a coordinate.
     UTF-8 text, or UTF-16 where a byte-order mark opens it (Windows
-    PowerShell's ``>``); a UTF-8 byte-order mark is skipped.
+    PowerShell's ``>``) or, without one, where every other byte is NUL
+    beside ASCII text (LE or BE); a UTF-8 byte-order mark is skipped.
 
     numpy's compiled reader takes the file when it can; a file it refuses,
     or whose numbers are not all integers in range, is read again line by
@@ -650,7 +651,7 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
         with open(path, "rb") as fh:
             head = fh.read(1024)
         encoding = _text_encoding(head)
-        if b"\0" in head and encoding != "utf-16":  # (UTF-16 text is half NUL bytes)
+        if b"\0" in head and not encoding.startswith("utf-16"):  # (UTF-16 text is half NUL bytes)
             found = sniff_volume_format(path)
             if found is not None:  # a volume without its suffix (or under another one)
                 raise IsoflowError(f"{path}: its content is {found[0]}, but volumes are read by their suffix: rename it "
@@ -731,11 +732,26 @@ volume or mesh format)
 def _text_encoding(head: bytes) -> str:
     """How a point list's text is encoded, from its first bytes: UTF-16
     where it opens with UTF-16's byte-order mark (what Windows PowerShell's
-    ``>`` and Notepad's "Unicode" write), else UTF-8, a byte-order mark
-    (Windows editors) skipped."""
+    ``>`` and Notepad's "Unicode" write); UTF-16 LE or BE without one
+    (some Windows tools write none) where the text unambiguously is: every
+    other byte NUL, the bytes between printable ASCII, tabs and line ends,
+    a digit among them; else UTF-8, a byte-order mark (Windows editors)
+    skipped. Anything else with a NUL byte stays binary."""
     import codecs
 
-    return "utf-16" if head.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)) else "utf-8-sig"
+    if head.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        return "utf-16"
+    # (a file of odd length is no UTF-16; the head of a longer one is 1024 bytes, even)
+    if len(head) >= 2 and len(head) % 2 == 0:
+        for encoding, chars, nuls in (("utf-16-le", head[0::2], head[1::2]), ("utf-16-be", head[1::2], head[0::2])):
+            if (not nuls.strip(b"\0") and not chars.translate(None, _ASCII_TEXT)
+                    and any(48 <= c <= 57 for c in chars)):
+                return encoding
+    return "utf-8-sig"
+
+
+#: the bytes of ASCII text a point list may hold: printable, tab, line ends
+_ASCII_TEXT = bytes(range(32, 127)) + b"\t\n\r"
 
 
 def _header_line(path: Path, encoding: str = "utf-8-sig") -> tuple[int, bool]:
@@ -892,7 +908,7 @@ def float64_may_round(path: Path, encoding: str = "utf-8-sig") -> bool:
     >>> float64_may_round(folder / "whole.txt"), float64_may_round(folder / "long.txt")
     (False, True)
     """
-    data = path.read_bytes() if encoding != "utf-16" else path.read_text(encoding=encoding).encode()
+    data = path.read_text(encoding=encoding).encode() if encoding.startswith("utf-16") else path.read_bytes()
     if b"e-" in data or b"E-" in data:
         return True
     # digits and points as "1", the rest as "0": a run of EXACT_RUN + 1 ones is a number float64 may round
