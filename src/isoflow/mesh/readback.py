@@ -147,22 +147,28 @@ def agreed_volume_words(read_units: float, voxels: int, spacing) -> str:
     return counted if read == counted else f"{counted} (read within the move of the corners)"
 
 
-#: peak bytes of the read-back: a fixed part (trimesh's and its readers'
-#: imports, which a run without the read-back never loads; docs/surface.md,
-#: "Memory: the check before meshing"), and per triangle of a binary file,
-#: by suffix (measured on the 11.5 million triangles of a 256^3 porous
+#: peak bytes of the read-back: a fixed part, by what this process has
+#: not loaded yet (which a run without the read-back never loads; measured
+#: around the read-back of a 3,792-triangle file, PLY, STL or GLB alike,
+#: with each loaded before or not; docs/surface.md): trimesh's and its
+#: readers' imports (67.6 to 79.4 MB), numba's start where no compiled
+#: pass has run yet (its import and the implementation modules its first
+#: call imports: 100.6 to 113.4 MB; ``surface --labels`` of small labels
+#: meshes without it), and the read-back's own compiled passes, loaded
+#: from numba's cache (1.2 to 2.3 MB), with about 10 % to spare
+READBACK_BYTES_TRIMESH = 88 << 20
+READBACK_BYTES_NUMBA = 125 << 20
+READBACK_BYTES_LOADED = 8 << 20
+#: all three: a process that has loaded neither (181 MB measured)
+READBACK_BYTES_FIXED = READBACK_BYTES_TRIMESH + READBACK_BYTES_NUMBA + READBACK_BYTES_LOADED
+#: and per triangle of a binary file (docs/surface.md, "Memory: the check
+#: before meshing"), by suffix (measured on the 11.5 million triangles of a 256^3 porous
 #: field: 99 for a PLY, 225 for an STL, whose positions are welded and its
 #: area summed (372 while its records were held to the end: 400 asked),
 #: 69 for a GLB), with about 10 % to spare and rounded up. The STL's weld
 #: hashes its corners in a table of a power of two entries, 2 to 4 a
 #: corner: 4 on that field (187 bytes a triangle on a 192^3 one, 2.3 a
 #: corner), so its most is what was measured there
-READBACK_BYTES_FIXED = 128 << 20
-#: what is left of the fixed part where trimesh is loaded already (an
-#: STL's writer loads it, as ``surface --labels`` does while it meshes;
-#: ``flow`` reads back every step): the read-back's compiled passes, whose
-#: first load grew a 3,792-triangle STL's read-back by 29.6 MB, to spare
-READBACK_BYTES_LOADED = 32 << 20
 READBACK_BYTES_PER_TRIANGLE = {".ply": 150, ".stl": 250, ".glb": 100}
 READBACK_BYTES_OTHER = 400
 #: and per line of a text file (a vertex or a face): an OBJ, read as
@@ -228,18 +234,22 @@ def readback_bytes(triangles: int, suffix: str = "", lines: int | None = None) -
 
 
 def readback_fixed() -> int:
-    """The read-back's fixed part: :data:`READBACK_BYTES_FIXED` (trimesh's
-    and its readers' imports) where trimesh is not loaded yet,
-    :data:`READBACK_BYTES_LOADED` where it is, whose imports cost nothing
-    more.
+    """The read-back's fixed part: :data:`READBACK_BYTES_LOADED`, and
+    :data:`READBACK_BYTES_TRIMESH` where trimesh is not loaded yet and
+    :data:`READBACK_BYTES_NUMBA` where numba has not started (no compiled
+    pass has run: its first call imports ``numba.np.arraymath`` among
+    the rest), whose imports cost nothing more once done.
 
     Examples
     --------
     >>> import trimesh
+    >>> from isoflow.mesh.equal_rows import first_equal
+    >>> _ = first_equal(np.zeros((1, 3)))  # a compiled pass: numba started
     >>> readback_fixed() == READBACK_BYTES_LOADED
     True
     """
-    return READBACK_BYTES_LOADED if "trimesh" in sys.modules else READBACK_BYTES_FIXED
+    return (READBACK_BYTES_LOADED + (0 if "trimesh" in sys.modules else READBACK_BYTES_TRIMESH)
+            + (0 if "numba.np.arraymath" in sys.modules else READBACK_BYTES_NUMBA))
 
 
 def readback_skipped(need: int) -> str | None:
