@@ -940,10 +940,13 @@ def surface_labels(args: argparse.Namespace, target) -> int:
         beyond = float32_transform_problem(image.spacing, image.array.shape, image.origin)
         if isinstance(show, TimeNote):  # the writing (or the read-back) paces the rest, from its first label on
             show.phase()
-        problems, faces = write_label_surfaces(args, target, meshes, glb_parts, report, expected, beyond, ahead)
+        problems, faces, unread = write_label_surfaces(args, target, meshes, glb_parts, report, expected, beyond, ahead)
     where = target[1] if target[0] == "glb" else f"{target[1]}/ ({counted(len(meshes), target[2] + ' file')})"
-    print(terminal_text(f"{where}: {counted(len(meshes), 'label')}, {faces}, one closed surface mesh per label"
-                        + ("" if args.no_check else ", each read back by trimesh as isoflow counts it" if not problems else "")))
+    # a read-back skipped for memory is said in its note, and the line claims only the files read back
+    read = "" if args.no_check or problems or unread >= len(meshes) else (
+        ", each read back by trimesh as isoflow counts it" if not unread else
+        f", {len(meshes) - unread:,} of them read back by trimesh as isoflow counts it")
+    print(terminal_text(f"{where}: {counted(len(meshes), 'label')}, {faces}, one closed surface mesh per label{read}"))
     moved = float64_move_note(target[1] if target[0] == "glb" else f"{target[1]}/", corners)
     if moved:  # every file's corners moved by float64 itself
         print(terminal_text(f"isoflow surface: warning: {moved}"), file=sys.stderr)
@@ -1156,25 +1159,29 @@ def _asked_among(values: list[int], asked: np.ndarray) -> list[bool]:
 
 def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_parts: list,
                          progress=None, expected: list | None = None, beyond: str | None = None,
-                         ahead: threading.Thread | None = None) -> tuple[list[str], str]:
+                         ahead: threading.Thread | None = None) -> tuple[list[str], str, int]:
     """Write every label's surface (a glTF node each, in the labels'
     order, from the batches' parts in ``glb_parts``, and read back against
     ``expected``, :func:`scene_expected`; or a file each, read back
     against ``meshes``) unless --no-check, telling ``progress(done,
     total)`` of the labels written (a file each) or read back. Returns
-    the problems found and the faces written in words (``18944 faces
-    (triangles)``: as the files hold them, as surface says of one).
+    the problems found, the faces written in words (``18944 faces
+    (triangles)``: as the files hold them, as surface says of one) and
+    how many labels were not read back, whose read-back would not fit in
+    memory (each file asked what ``surface`` asks of one, the scene what
+    it asks of a GLB of as many triangles; said in a note).
     ``beyond``: what of the image's placement a GLB node's transform
     cannot hold in float32, said in the note on the transforms.
     ``ahead``: the thread importing trimesh
     (:func:`isoflow.cli.imports_ahead.import_ahead`), joined before
     trimesh is first used."""
     from ..mesh import export
-    from ..mesh.readback import check_scene_figures, check_surface_file
+    from ..mesh.readback import check_scene_figures, check_surface_file, readback_bytes, readback_skipped
     from .progress import reading_back
 
     if target[0] == "glb":
-        faces = f"{sum(len(parts.triangles) for parts, _ in glb_parts)} faces (triangles)"
+        triangles = sum(len(parts.triangles) for parts, _ in glb_parts)
+        faces = f"{triangles} faces (triangles)"
         rows = np.concatenate([r for _, r in glb_parts]) if glb_parts else np.zeros(0, np.int64)
         export.write_glb_sets(target[1], [parts for parts, _ in glb_parts], np.argsort(rows), force=args.force,
                               comment=f"isoflow surface --labels of {args.input}, "
@@ -1188,12 +1195,17 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
         with reading_back(target[1]):
             if ahead is not None:  # (the file is in place: a signal during the wait says so)
                 ahead.join()
-            return ([] if expected is None else check_scene_figures(target[1], expected, progress)), faces
+            why = None if expected is None else readback_skipped(readback_bytes(triangles, ".glb"))
+            if why is not None:
+                if not args.quiet:
+                    print(terminal_text(f"isoflow surface: note: {target[1]}: not read back ({why})"), file=sys.stderr)
+                return [], faces, len(rows)
+            return ([] if expected is None else check_scene_figures(target[1], expected, progress)), faces, 0
     from ..mesh.outputs import output_set
 
     if ahead is not None:  # each file is read back as soon as it is written (and an STL is written by trimesh)
         ahead.join()
-    problems = []
+    problems, unread = [], {}  # label file -> why it was not read back
     count, kinds = 0, {}  # faces written, of each kind (a label with edge midpoints: triangles in PLY)
     welds = {}  # label file -> the contacts STL cannot keep apart
     moved = {"moved": 0.0, "moved_voxels": 0.0}  # the farthest float32 moved an STL's corners, of every file
@@ -1224,7 +1236,9 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
             if not args.no_check:
                 with reading_back(path):
                     check = check_surface_file(path, mesh, obj, topology=not welded, components=comps)
-                if check.get("agree") is False:
+                if check.get("skipped"):
+                    unread[path.name] = check["skipped"]
+                elif check.get("agree") is False:
                     problems.append(check["problem"])
             if progress is not None:
                 progress(done, len(meshes))
@@ -1233,6 +1247,10 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
         note = export.glb_transform_note(where, framed, len(meshes), "file", beyond=beyond,
                                          instead="--suffix .ply or .obj")
         print(terminal_text(f"isoflow surface: note: {note}"), file=sys.stderr)
+    if unread and not args.quiet:  # as surface says of one file
+        first = next(iter(unread))
+        print(terminal_text(f"isoflow surface: note: {target[1]}/: {counted(len(unread), 'label file')} not read back "
+                            f"({first}: {unread[first]})"), file=sys.stderr)
     if moved["moved_voxels"] > export.STL_NOTE_VOXELS:  # as surface says of one STL file, under --quiet too
         print(terminal_text(f"isoflow surface: warning: {export.stl_move_note(f'{target[1]}/', moved)}"), file=sys.stderr)
     if welds:  # as surface says of one STL file, under --quiet too
@@ -1240,4 +1258,4 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
                 f"copies at {sum(welds.values())} edge/vertex contacts of {counted(len(welds), 'file')} "
                 f"({_some(list(welds))}) into non-manifold points; PLY, OBJ or GLB keep them apart")
         print(terminal_text(line), file=sys.stderr)
-    return problems, f"{count} faces ({', '.join(kinds)})"
+    return problems, f"{count} faces ({', '.join(kinds)})", len(unread)

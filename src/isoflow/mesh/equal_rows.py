@@ -69,8 +69,11 @@ def first_equal(points: np.ndarray) -> np.ndarray:
     >>> first_equal(np.array([[1.0, 2.0], [0.0, 5.0], [1.0, 2.0], [-0.0, 5.0]])).tolist()
     [0, 1, 0, 1]
     """
-    # + 0.0 makes -0.0 0.0, so that the two zeros, equal, hash alike
-    p = np.ascontiguousarray(points, np.float64).reshape(len(points), -1) + 0.0
+    # + 0.0 makes -0.0 0.0, so that the two zeros, equal, hash alike; added
+    # in place, as a float32 table's (an STL's corners) float64 copy and
+    # its sum would be two copies at once
+    p = np.array(points, np.float64, order="C").reshape(len(points), -1)
+    p += 0.0
     table = np.full(1 << max(int(2 * len(p)).bit_length(), 1), -1, np.int64)
     first = np.empty(len(p), np.int64)
     _first_equal(p, p.view(np.int64), table, first)

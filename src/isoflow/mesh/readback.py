@@ -17,7 +17,7 @@ gives: :func:`obj_as_trimesh_reads`; a GLB's trimesh reader is given
 the accessors the figures use: :func:`scene_nodes`); the figures are
 counted by their trimesh definitions in one compiled pass over its arrays
 (:mod:`isoflow.mesh.node_topology`), which sorts no edge. The read-back
-needs about 100 bytes per triangle of a binary PLY, 70 of a GLB, 360 of
+needs about 100 bytes per triangle of a binary PLY, 70 of a GLB, 225 of
 an STL whose positions are welded, and per line of a text file 280 of an
 OBJ and 470 of an ASCII PLY (trimesh's parse holds a string and an array
 a line), measured on the 11.5 million triangles of a 256^3 porous field
@@ -30,6 +30,7 @@ from __future__ import annotations
 import contextlib
 import gc
 import os
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -146,15 +147,29 @@ def agreed_volume_words(read_units: float, voxels: int, spacing) -> str:
     return counted if read == counted else f"{counted} (read within the move of the corners)"
 
 
-#: peak bytes of the read-back: a fixed part (trimesh's and its readers'
-#: imports, which a run without the read-back never loads; docs/surface.md,
-#: "Memory: the check before meshing"), and per triangle of a binary file,
-#: by suffix (measured on the 11.5 million triangles of a 256^3 porous
-#: field: 99 for a PLY, 360 for an STL, whose positions are welded and its
-#: area summed, 69 for a GLB; the 250 asked of an STL fell short by 1.3 GB
-#: there), with about 10 % to spare and rounded up
-READBACK_BYTES_FIXED = 128 << 20
-READBACK_BYTES_PER_TRIANGLE = {".ply": 150, ".stl": 400, ".glb": 100}
+#: peak bytes of the read-back: a fixed part, by what this process has
+#: not loaded yet (which a run without the read-back never loads; measured
+#: around the read-back of a 3,792-triangle file, PLY, STL or GLB alike,
+#: with each loaded before or not; docs/surface.md): trimesh's and its
+#: readers' imports (67.6 to 79.4 MB), numba's start where no compiled
+#: pass has run yet (its import and the implementation modules its first
+#: call imports: 100.6 to 113.4 MB; ``surface --labels`` of small labels
+#: meshes without it), and the read-back's own compiled passes, loaded
+#: from numba's cache (1.2 to 2.3 MB), with about 10 % to spare
+READBACK_BYTES_TRIMESH = 88 << 20
+READBACK_BYTES_NUMBA = 125 << 20
+READBACK_BYTES_LOADED = 8 << 20
+#: all three: a process that has loaded neither (181 MB measured)
+READBACK_BYTES_FIXED = READBACK_BYTES_TRIMESH + READBACK_BYTES_NUMBA + READBACK_BYTES_LOADED
+#: and per triangle of a binary file (docs/surface.md, "Memory: the check
+#: before meshing"), by suffix (measured on the 11.5 million triangles of a 256^3 porous
+#: field: 99 for a PLY, 225 for an STL, whose positions are welded and its
+#: area summed (372 while its records were held to the end: 400 asked),
+#: 69 for a GLB), with about 10 % to spare and rounded up. The STL's weld
+#: hashes its corners in a table of a power of two entries, 2 to 4 a
+#: corner: 4 on that field (187 bytes a triangle on a 192^3 one, 2.3 a
+#: corner), so its most is what was measured there
+READBACK_BYTES_PER_TRIANGLE = {".ply": 150, ".stl": 250, ".glb": 100}
 READBACK_BYTES_OTHER = 400
 #: and per line of a text file (a vertex or a face): an OBJ, read as
 #: arrays of its bytes (measured 271 to 275 there; 347 allocated on a
@@ -183,25 +198,73 @@ def readback_memory(mesh, suffix: str = "", lines: int | None = None) -> int:
     Returns
     -------
     int
-        The imports, and per triangle (two per quad and one more per edge
-        midpoint of a face) or per line of text.
+        The imports (:func:`readback_fixed`), and per triangle (two per
+        quad and one more per edge midpoint of a face) or per line of text.
 
     Examples
     --------
     >>> from isoflow.digital.surface import boundary_mesh
     >>> mesh = boundary_mesh(np.ones((2, 2, 2), bool))
-    >>> readback_memory(mesh, ".stl") - READBACK_BYTES_FIXED  # 24 squares, 48 triangles
-    19200
-    >>> readback_memory(mesh, ".ply", lines=26 + 24) - READBACK_BYTES_FIXED  # ASCII: a line a vertex, a face
+    >>> readback_memory(mesh, ".stl") - readback_fixed()  # 24 squares, 48 triangles
+    12000
+    >>> readback_memory(mesh, ".ply", lines=26 + 24) - readback_fixed()  # ASCII: a line a vertex, a face
     26000
     """
     suffix = suffix.lower()
     triangles = 2 * len(mesh.faces) + int(np.count_nonzero(mesh.edge_midpoint >= 0))
     if suffix == ".obj" and lines is None:
         lines = len(mesh.vertices) + triangles
+    return readback_bytes(triangles, suffix, lines)
+
+
+def readback_bytes(triangles: int, suffix: str = "", lines: int | None = None) -> int:
+    """:func:`readback_memory` of a file of ``triangles`` triangles (a
+    scene's, all its nodes together), or of ``lines`` lines where it is
+    text.
+
+    Examples
+    --------
+    >>> readback_bytes(48, ".stl") - readback_fixed(), readback_bytes(1000, ".glb") - readback_fixed()
+    (12000, 100000)
+    """
+    suffix = suffix.lower()
     if lines is not None and suffix in READBACK_BYTES_PER_LINE:
-        return READBACK_BYTES_FIXED + lines * READBACK_BYTES_PER_LINE[suffix]
-    return READBACK_BYTES_FIXED + triangles * READBACK_BYTES_PER_TRIANGLE.get(suffix, READBACK_BYTES_OTHER)
+        return readback_fixed() + lines * READBACK_BYTES_PER_LINE[suffix]
+    return readback_fixed() + int(triangles) * READBACK_BYTES_PER_TRIANGLE.get(suffix, READBACK_BYTES_OTHER)
+
+
+def readback_fixed() -> int:
+    """The read-back's fixed part: :data:`READBACK_BYTES_LOADED`, and
+    :data:`READBACK_BYTES_TRIMESH` where trimesh is not loaded yet and
+    :data:`READBACK_BYTES_NUMBA` where numba has not started (no compiled
+    pass has run: its first call imports ``numba.np.arraymath`` among
+    the rest), whose imports cost nothing more once done.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from isoflow.mesh.equal_rows import first_equal
+    >>> _ = first_equal(np.zeros((1, 3)))  # a compiled pass: numba started
+    >>> readback_fixed() == READBACK_BYTES_LOADED
+    True
+    """
+    return (READBACK_BYTES_LOADED + (0 if "trimesh" in sys.modules else READBACK_BYTES_TRIMESH)
+            + (0 if "numba.np.arraymath" in sys.modules else READBACK_BYTES_NUMBA))
+
+
+def readback_skipped(need: int) -> str | None:
+    """Why a read-back of ``need`` bytes is skipped (it would not fit in
+    the memory budget), in the words of the note; None where it fits.
+
+    Examples
+    --------
+    >>> readback_skipped(1) is None, readback_skipped(1 << 60).startswith("trimesh would need about ")
+    (True, True)
+    """
+    from ..scale.memory import default_budget, sized
+
+    budget = default_budget()
+    return f"trimesh would need about {sized(need)}, more than the budget of {sized(budget)}" if need > budget else None
 
 
 def text_lines(path: str | os.PathLike) -> int | None:
@@ -316,6 +379,9 @@ def trimesh_figures(path, weld: bool = False, unit: float = 1.0, area: bool = Fa
     import trimesh
 
     path = Path(path)
+    if path.suffix.lower() == ".stl" and weld:
+        tm = trimesh.Trimesh(*welded_stl(path), process=False)
+        return mesh_figures(tm, unit, area=True)
     if path.suffix.lower() in (".ply", ".stl"):
         # the format's own reader, whose arrays make the mesh as they are
         # (trimesh.load of an STL copies the mesh twice through a scene)
@@ -416,8 +482,12 @@ def mesh_figures(tm, unit: float = 1.0, area: bool = False) -> dict:
         with np.errstate(over="ignore", under="ignore", invalid="ignore"):
             local = v / unit  # before the mean: near float64's largest coordinates their world sum is inf
             local = local - (local.mean(axis=0) if len(v) else 0.0)
-            area_units = float(np.linalg.norm(np.cross(local[faces[:, 1]] - local[faces[:, 0]],
-                                                       local[faces[:, 2]] - local[faces[:, 0]]), axis=1).sum() / 2)
+            # a million triangles at a time: the corners' tables of every
+            # triangle at once were most of an STL's read-back
+            step = 1 << 20
+            area_units = float(sum(np.linalg.norm(np.cross(local[f[:, 1]] - local[f[:, 0]], local[f[:, 2]] - local[f[:, 0]]),
+                                                  axis=1).sum() for f in (faces[i:i + step] for i in range(0, len(faces), step)))
+                               / 2)
     return figures(bool(topology["closed"][0]), euler, bodies, units, unit, area_units)
 
 
@@ -431,6 +501,54 @@ def figures(closed: bool, euler: int, bodies: int, volume_units: float, unit: fl
     return {"watertight": closed, "euler_number": int(euler),
             "genus": int(bodies - euler // 2) if closed and euler % 2 == 0 else None,
             "volume": volume, "volume_units": float(volume_units), "area_units": area_units}
+
+
+def welded_stl(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
+    """An STL as trimesh's reader parses it, its equal positions welded
+    into one vertex (:func:`weld_equal_positions`): the distinct positions
+    and the triangles on them. The file's records (positions, normals,
+    attributes: 50 bytes a triangle) are let go once the corners are
+    welded, and the reader's triangles (the corners in order, 24 bytes a
+    triangle) as soon as they are found to be that order; the positions
+    are welded as the file's float32 (the weld's float64 copy of them is
+    its own).
+
+    Examples
+    --------
+    >>> import tempfile, trimesh
+    >>> path = Path(tempfile.mkdtemp()) / "box.stl"
+    >>> _ = trimesh.creation.box().export(path)
+    >>> vertices, triangles = welded_stl(path)
+    >>> vertices.shape, triangles.shape, vertices.dtype.name
+    ((8, 3), (12, 3), 'float32')
+    """
+    from trimesh.exchange.stl import load_stl
+
+    from .load import distinct_rows
+
+    with open(path, "rb") as fh:
+        kw = load_stl(fh)
+    corners, triangles = kw.pop("vertices"), kw.pop("faces")
+    del kw  # the normals and attributes, views of the records
+    if corners_in_order(triangles):
+        triangles = None
+    points, at = distinct_rows(corners)
+    del corners  # the last view of the records
+    return points, at.reshape(-1, 3) if triangles is None else at[triangles]
+
+
+def corners_in_order(triangles: np.ndarray) -> bool:
+    """Whether the triangles are ``0 1 2``, ``3 4 5``, ... (as trimesh's
+    STL reader makes them), checked a million corners at a time.
+
+    Examples
+    --------
+    >>> corners_in_order(np.arange(6).reshape(2, 3)), corners_in_order(np.array([[0, 2, 1]]))
+    (True, False)
+    """
+    flat = np.asarray(triangles).reshape(-1)
+    step = 1 << 20
+    return all(np.array_equal(flat[i:i + step], np.arange(i, min(i + step, len(flat)))) for i in range(0, len(flat), step))
 
 
 def weld_equal_positions(tm):
@@ -489,13 +607,10 @@ def check_surface_file(path, mesh, obj, *, topology: bool = True, components: li
     from the origin against its voxel size
     (:func:`isoflow.mesh.float32.float64_corners`).
     """
-    from ..scale.memory import default_budget, sized
-
     path = Path(path)
     # a text file's parse is counted per line of it: a file of triangles holds more lines than one of quads
-    need, budget = readback_memory(mesh, path.suffix, text_lines(staged(path))), default_budget()
-    if need > budget:
-        why = f"trimesh would need about {sized(need)}, more than the budget of {sized(budget)}"
+    why = readback_skipped(readback_memory(mesh, path.suffix, text_lines(staged(path))))
+    if why is not None:
         return {"isoflow": None, "trimesh": None, "agree": None, "problem": None, "skipped": why}
     ours = isoflow_figures(mesh, obj, components)
     # far from the origin against the voxel size float64 itself moves the
