@@ -132,8 +132,8 @@ def number_text(value: object) -> str:
     if isinstance(value, bool):  # a mask's values: 0 and 1
         value = int(value)
     if isinstance(value, float) and value.is_integer() and abs(value) < 2.0**53:
-        # past 2**53 a float is no whole number the user wrote digit by digit: --label 1e300 printed as
-        # 301 digits, of which the last 285 are the float's rounding; its shortest repr is what was meant
+        # past 2**53 a float is no whole number the user wrote digit by digit: 1e300 in all its digits is
+        # 301 of them, the last 285 the float's rounding; its shortest repr is what the user meant
         value = int(value)
     if isinstance(value, float):
         return repr(value)

@@ -105,7 +105,7 @@ def label_value(text: str) -> int | float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    # a whole float past 2**53 stays a float: as an int, 1e300 was refused in its 301 digits, not as typed
+    # a whole float past 2**53 stays a float: as an int, a refusal would name 1e300 in 301 digits, not as typed
     return int(value) if value.is_integer() and abs(value) < 2.0**53 else value
 
 

@@ -164,8 +164,7 @@ READBACK_BYTES_FIXED = READBACK_BYTES_TRIMESH + READBACK_BYTES_NUMBA + READBACK_
 #: and per triangle of a binary file (docs/surface.md, "Memory: the check
 #: before meshing"), by suffix (measured on the 11.5 million triangles of a 256^3 porous
 #: field: 99 for a PLY, 225 for an STL, whose positions are welded and its
-#: area summed (372 while its records were held to the end: 400 asked),
-#: 69 for a GLB), with about 10 % to spare and rounded up. The STL's weld
+#: area summed, 69 for a GLB), with about 10 % to spare and rounded up. The STL's weld
 #: hashes its corners in a table of a power of two entries, 2 to 4 a
 #: corner: 4 on that field (187 bytes a triangle on a 192^3 one, 2.3 a
 #: corner), so its most is what was measured there
@@ -174,9 +173,8 @@ READBACK_BYTES_OTHER = 400
 #: and per line of a text file (a vertex or a face): an OBJ, read as
 #: arrays of its bytes (measured 271 to 275 there; 347 allocated on a
 #: 40^3 field of 51,000 triangles), and an ASCII PLY, which trimesh's parse
-#: holds as a string and an array a line (463 to 468: the 150 a triangle
-#: asked of every PLY was a third of it); the lines are the file's, so an
-#: OBJ or a PLY of triangles is asked for its own
+#: holds as a string and an array a line (463 to 468); the lines are the
+#: file's, so an OBJ or a PLY of triangles is asked for its own
 READBACK_BYTES_PER_LINE = {".obj": 380, ".ply": 520}
 
 
@@ -483,7 +481,7 @@ def mesh_figures(tm, unit: float = 1.0, area: bool = False) -> dict:
             local = v / unit  # before the mean: near float64's largest coordinates their world sum is inf
             local = local - (local.mean(axis=0) if len(v) else 0.0)
             # a million triangles at a time: the corners' tables of every
-            # triangle at once were most of an STL's read-back
+            # triangle at once would be most of an STL's read-back
             step = 1 << 20
             area_units = float(sum(np.linalg.norm(np.cross(local[f[:, 1]] - local[f[:, 0]], local[f[:, 2]] - local[f[:, 0]]),
                                                   axis=1).sum() for f in (faces[i:i + step] for i in range(0, len(faces), step)))

@@ -283,7 +283,7 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
     # a NIfTI dimension of 0 is written, but nibabel reads the file back as shape (0,)
     refuse_empty(path, obj.volume.shape, "NIfTI")
     if max(obj.volume.shape, default=0) > MAX_SIDE:
-        # (nibabel's HeaderDataError came as a traceback once the work was done)
+        # here, before the write: nibabel's HeaderDataError would come only after the work, as a traceback
         raise IsoflowError(f"{path}: NIfTI-1 holds at most {MAX_SIDE} voxels a side (its dim[] is int16), this "
                            f"image is {'x'.join(map(str, obj.volume.shape))}; write .nrrd, .h5, .zarr or .npz")
     if unit not in XYZT_UNITS:
