@@ -326,6 +326,31 @@ def test_a_utf16_table_of_names_reads_as_the_text_it_is(tmp_path, seg, encoding)
     assert {r["label"]: r["name"] for r in json.loads(done.stdout)["labels"]} == want
 
 
+@pytest.mark.parametrize("encoding", ["utf-16-le", "utf-16-be"])
+def test_utf16_names_without_a_byte_order_mark_read_as_their_text(tmp_path, encoding):
+    """Some Windows tools write UTF-16 without a byte-order mark; the
+    point-list reader took such text, ``--names`` refused it as "binary
+    data". Read from the shell, every other byte NUL in one order and the
+    file decoding so, the names are the text Python's codec reads, a
+    non-ASCII letter kept; a run of NUL bytes stays binary data."""
+    labels = np.zeros((6, 6, 6), np.uint8)
+    labels[1:3, 1:3, 1:3], labels[4, 4, 4] = 1, 2
+    image = tmp_path / "labels.npy"
+    np.save(image, labels)
+    path = tmp_path / "names.txt"
+    path.write_text("1 liver\n2 rein gauche é\n", encoding=encoding)
+    assert not path.read_bytes().startswith((b"\xff\xfe", b"\xfe\xff")) and b"\0" in path.read_bytes()
+    want = dict(line.split(" ", 1) for line in path.read_text(encoding=encoding).splitlines())
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(image), "--labels", "--names", str(path),
+                           "--json", "--no-surfaces", "-q"], capture_output=True, text=True)
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+    assert {str(r["label"]): r["name"] for r in json.loads(done.stdout)["labels"]} == want
+    path.write_bytes(bytes(64))
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(image), "--labels", "--names", str(path)],
+                          capture_output=True, text=True)
+    assert done.returncode == 2 and "holds binary data" in done.stderr and "Traceback" not in done.stderr
+
+
 @pytest.mark.parametrize(("name", "text"), [
     ("names.csv", 'index;name\r\n2;Left-Cerebral-White-Matter\r\n17;"Hippocampus; left"\r\n53;Right, Hippocampus\r\n'),
     ("names.txt", "label;name\n2;white matter\n17;hippocampus\n53;right hippocampus\n"),

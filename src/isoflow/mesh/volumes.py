@@ -39,6 +39,7 @@ from .formats.registry import (
     split_dataset,
     volume_suffixes,
 )
+from .formats.text_encoding import utf16_order
 from .outputs import atomic_path, check_output_path, refuse_directory_spelling
 
 #: every volume suffix read_volume takes (see isoflow.mesh.formats.registry)
@@ -737,16 +738,14 @@ def _text_encoding(head: bytes) -> str:
     other byte NUL, the bytes between printable ASCII, tabs and line ends,
     a digit among them; else UTF-8, a byte-order mark (Windows editors)
     skipped. Anything else with a NUL byte stays binary."""
-    import codecs
-
-    if head.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
-        return "utf-16"
-    # (a file of odd length is no UTF-16; the head of a longer one is 1024 bytes, even)
-    if len(head) >= 2 and len(head) % 2 == 0:
-        for encoding, chars, nuls in (("utf-16-le", head[0::2], head[1::2]), ("utf-16-be", head[1::2], head[0::2])):
-            if (not nuls.strip(b"\0") and not chars.translate(None, _ASCII_TEXT)
-                    and any(48 <= c <= 57 for c in chars)):
-                return encoding
+    encoding = utf16_order(head)
+    if encoding == "utf-16":
+        return encoding
+    if encoding is not None:
+        # a point list's UTF-16 without a mark is held to ASCII text: its bytes between are that text
+        chars = head[0::2] if encoding == "utf-16-le" else head[1::2]
+        if not chars.translate(None, _ASCII_TEXT) and any(48 <= c <= 57 for c in chars):
+            return encoding
     return "utf-8-sig"
 
 

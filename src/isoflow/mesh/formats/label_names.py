@@ -23,7 +23,9 @@ content (the suffix only breaks a tie):
   ``labels`` map name to label (``{"background": 0, "spleen": 1}``).
 
 The text is UTF-8 (Latin-1 where it is none), or UTF-16 behind its
-byte-order mark (Excel's "Unicode Text"). ``#`` starts a comment line and
+byte-order mark (Excel's "Unicode Text"), or UTF-16 without one where
+every other byte of the first 1024 is NUL and the file decodes in that
+byte order. ``#`` starts a comment line and
 blank lines are skipped in the text kinds. Label 0 is the background and
 is not named; a label named twice is refused naming the line. A file of
 numbers alone (a point list, ``0 0 0`` per line, given for the names) is
@@ -35,7 +37,6 @@ name).
 from __future__ import annotations
 
 import bisect
-import codecs
 import csv
 import json
 import os
@@ -46,6 +47,7 @@ from pathlib import Path
 
 from ...errors import IsoflowError, check_path, line_text, missing
 from .registry import format_for, one_line_name
+from .text_encoding import HEAD_BYTES, utf16_order
 
 #: what a file of label names is, for the refusal of one that is none
 EXPECTED = ("expected a FreeSurfer or 3D Slicer colour table (lines 'index name R G B A'), an ITK-SNAP label "
@@ -128,7 +130,8 @@ def read_label_names(path: str | os.PathLike) -> dict[int, str]:
         if isinstance(exc, (FileNotFoundError, NotADirectoryError)):  # said as every reader says a missing input
             raise missing(where) from None
         raise IsoflowError(f"{where}: cannot read the label names ({exc.strerror or type(exc).__name__})") from None
-    if data.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+    encoding = utf16_order(data[:HEAD_BYTES])
+    if encoding == "utf-16":
         # Excel's "Unicode Text" and PowerShell's ">" write UTF-16 behind its byte-order mark: text, though
         # half its bytes are NUL, which the test below took for binary data
         try:
@@ -137,6 +140,13 @@ def read_label_names(path: str | os.PathLike) -> dict[int, str]:
             raise IsoflowError(f"{where}: opens as UTF-16 text (its byte-order mark) but is not UTF-16; "
                                f"{EXPECTED}") from None
         return label_names_of(text, where, Path(path).suffix.lower())
+    if encoding is not None:
+        # UTF-16 without a mark (some Windows tools write none): names may hold any letter, so the whole
+        # file must decode in the order its NUL bytes tell; a binary file that does not stays refused below
+        try:
+            return label_names_of(data.decode(encoding), where, Path(path).suffix.lower())
+        except UnicodeDecodeError:
+            pass
     if b"\0" in data[:1 << 16]:  # a volume given for its names (seg.nii.gz), or any binary file
         raise IsoflowError(f"{where}: not a file of label names (it holds binary data); {EXPECTED}")
     try:
