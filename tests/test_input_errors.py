@@ -1165,6 +1165,66 @@ def test_a_point_cloud_is_named_with_its_points(tmp_path, capsys, suffix, comman
     assert not (tmp_path / "OUT.npy").exists()
 
 
+@pytest.mark.parametrize("suffix", [".obj", ".ply"])
+@pytest.mark.parametrize("edges", [0, 2], ids=["points", "lines"])
+def test_a_faceless_file_is_read_once_for_its_refusal(tmp_path, monkeypatch, suffix, edges):
+    """The refusal of a PLY or OBJ of vertices and no face read the file
+    twice after its reader gave up, once for its points and once for its
+    lines (a PLY's header parsed each time). It reads it once, parses a
+    PLY's header once, and the line is the one the shell gives, with the
+    3 points and the lines written."""
+    import builtins
+
+    from isoflow.mesh import load, ply
+
+    corners = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
+    path = tmp_path / f"part{suffix}"
+    if suffix == ".obj":
+        path.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in corners) + "l 1 2\nl 2 3\n" * (edges // 2))
+    else:
+        path.write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                        "property float z\n" + ("element edge 2\nproperty int vertex1\nproperty int vertex2\n" * bool(edges))
+                        + "end_header\n" + "".join(f"{x} {y} {z}\n" for x, y, z in corners) + "0 1\n1 2\n" * bool(edges))
+    reads, parses, refusing = [], [], [False]
+    opened, path_open, parse, refusal = builtins.open, Path.open, ply.header_elements, load._point_cloud_line
+
+    def counted_open(file, *args, **kwargs):
+        if refusing[0] and os.fspath(file) == str(path):
+            reads.append(file)
+        return opened(file, *args, **kwargs)
+
+    def counted_path_open(self, *args, **kwargs):
+        if refusing[0] and self == path:
+            reads.append(self)
+        return path_open(self, *args, **kwargs)
+
+    def counted_parse(*args, **kwargs):
+        parses.append(refusing[0])
+        return parse(*args, **kwargs)
+
+    def watched_refusal(*args, **kwargs):
+        refusing[0] = True
+        try:
+            return refusal(*args, **kwargs)
+        finally:
+            refusing[0] = False
+
+    monkeypatch.setattr(builtins, "open", counted_open)
+    monkeypatch.setattr(Path, "open", counted_path_open)
+    monkeypatch.setattr(ply, "header_elements", counted_parse)
+    monkeypatch.setattr(load, "_point_cloud_line", watched_refusal)
+    with pytest.raises(IsoflowError) as caught:
+        load.load_mesh(path)
+    assert len(reads) == 1, reads
+    assert parses.count(True) == (suffix == ".ply")
+    want = (f"{path}: no triangles read: it holds 3 points joined by 2 lines and no faces, a wireframe, not a surface"
+            if edges else f"{path}: no triangles read: it holds 3 points and no faces, a point cloud, not a surface")
+    assert str(caught.value).startswith(want), caught.value
+    monkeypatch.undo()
+    done = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(path)], capture_output=True, text=True)
+    assert done.returncode == 2 and done.stderr.strip() == f"isoflow genus: error: {caught.value}", done.stderr
+
+
 @pytest.mark.parametrize("zipped", [False, True], ids=["file", "zip"])
 @pytest.mark.parametrize("suffix", [".obj", ".ply"])
 @pytest.mark.parametrize("command", [["genus"], ["voxelize", "--resolution", "8", "-o", "OUT.npy"],

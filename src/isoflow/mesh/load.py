@@ -492,10 +492,10 @@ def _point_cloud_line(path: Path, vertices: np.ndarray) -> str | None:
     """The line for a file that holds points and no face (a scan's point
     cloud saved as PLY, OBJ or GLB): what it holds, and that a surface is
     made from it elsewhere; None where it holds no point either."""
-    n = len(np.asarray(vertices).reshape(-1, 3)) if np.size(vertices) else _points_held(path)
+    points, lines = _faceless_held(path)
+    n = len(np.asarray(vertices).reshape(-1, 3)) if np.size(vertices) else points
     if not n:
         return None
-    lines = _lines_held(path)
     return wireframe_line(path, n, lines) if lines else point_cloud_line(path, n)
 
 
@@ -529,21 +529,30 @@ def wireframe_line(where: str | os.PathLike, points: int, lines: int) -> str:
             "voxelise; export the model's faces (a mesh of triangles), not its edges or curves")
 
 
-def _lines_held(path: Path) -> int:
-    """The lines of a file whose reader gave no face: an OBJ's ``l`` lines,
-    the rows of a PLY's ``edge`` element; 0 otherwise (and for a file that
-    cannot be read again: the point-cloud line is said then)."""
-    if path.suffix.lower() not in (".obj", ".ply"):
-        return 0
+def _faceless_held(path: Path) -> tuple[int, int]:
+    """The points and lines of a file whose reader gave no face: from a
+    PLY's header (its ``vertex`` rows where it has no ``face`` rows, its
+    ``edge`` rows), an OBJ's ``v`` lines (where it has no ``f`` line) and
+    ``l`` lines, read once, as :func:`_faceless_counts` counts them; a
+    glTF's point clouds (:func:`_points_held`) and no lines; (0, 0) for
+    a file that cannot be read again (the plain "no triangles read" line
+    is said then)."""
+    kind = path.suffix.lower().lstrip(".")
+    if kind not in ("ply", "obj"):
+        return _points_held(path), 0
     try:
-        return _lines_in(path.read_bytes(), path.suffix.lower().lstrip("."), str(path))
+        with open(path, "rb") as fh:
+            # a PLY's counts are in its header: a point cloud of millions of rows is not read again for them
+            data = fh.read() if kind == "obj" else fh.read(PLY_HEADER_BYTES)
     except OSError:
-        return 0
+        return 0, 0
+    return _faceless_counts(data, kind, str(path))
 
 
 def _lines_in(data: bytes, kind: str, where: str) -> int:
-    """:func:`_lines_held` of a file's bytes, ``kind`` its format as
-    trimesh names it (``obj``, ``ply``): an archive's member too."""
+    """The lines of a file's bytes (an OBJ's ``l`` lines, the rows of a
+    PLY's ``edge`` element), ``kind`` its format as trimesh names it
+    (``obj``, ``ply``): an archive's member too; 0 otherwise."""
     try:
         if kind == "obj":
             # every OBJ trimesh reads is looked at for the note: a byte search
@@ -586,36 +595,40 @@ def point_cloud_line(where: str | os.PathLike, points: int) -> str:
 
 
 def _points_held(path: Path) -> int:
-    """The points of a file whose reader gave no vertex for want of faces:
-    a PLY's ``element vertex`` count (its header alone), an OBJ's ``v``
-    lines where it has no ``f`` line, a glTF's point clouds as trimesh reads
-    its scene; 0 otherwise."""
-    ext = path.suffix.lower()
+    """The points of a glTF file whose reader gave no vertex for want of
+    faces: its point clouds as trimesh reads its scene; 0 otherwise."""
+    if path.suffix.lower() not in (".glb", ".gltf"):
+        return 0
     try:
-        if ext in (".ply", ".obj"):
-            return _points_in(path.read_bytes(), ext.lstrip("."), str(path))
-        if ext in (".glb", ".gltf"):
-            import trimesh
+        import trimesh
 
-            scene = trimesh.load(path, force="scene")
-            return sum(len(g.vertices) for g in scene.geometry.values() if isinstance(g, trimesh.PointCloud))
+        scene = trimesh.load(path, force="scene")
+        return sum(len(g.vertices) for g in scene.geometry.values() if isinstance(g, trimesh.PointCloud))
     except Exception:  # (the plain "no triangles read" line is said then)
         return 0
-    return 0
 
 
-def _points_in(data: bytes, kind: str, where: str) -> int:
-    """:func:`_points_held` of a PLY's or an OBJ's bytes, ``kind`` its
-    format as trimesh names it: an archive's member too."""
+def _faceless_counts(data: bytes, kind: str, where: str) -> tuple[int, int]:
+    """The points and lines of a PLY's or an OBJ's bytes (``kind`` its
+    format as trimesh names it; an archive's member too) that hold no
+    face: a PLY's ``vertex`` and ``edge`` rows from one reading of its
+    header, an OBJ's ``v`` and ``l`` lines; no points where it has faces
+    (``face`` rows, ``f`` lines), (0, 0) for another kind or a header out
+    of the grammar."""
     if kind == "ply":
         from .ply import header_elements
 
-        parsed = header_elements(data, where)
-        rows = {} if parsed is None else {e.name: e.rows for e in parsed[2]}
-        return 0 if rows.get("face") else rows.get("vertex", 0)
+        try:
+            parsed = header_elements(data, where)
+        except IsoflowError:
+            return 0, 0
+        elements = [] if parsed is None else parsed[2]
+        rows = {e.name: e.rows for e in elements}
+        return (0 if rows.get("face") else rows.get("vertex", 0)), sum(e.rows for e in elements if e.name == "edge")
     if kind == "obj":
-        return 0 if re.search(rb"^f\s", data, flags=re.M) else len(re.findall(rb"^v\s", data, flags=re.M))
-    return 0
+        points = 0 if re.search(rb"^f\s", data, flags=re.M) else len(re.findall(rb"^v\s", data, flags=re.M))
+        return points, _lines_in(data, kind, where)
+    return 0, 0
 
 
 def why_no_face(vertices: np.ndarray, faces: np.ndarray, rtol: float, where: str) -> str:
@@ -1022,8 +1035,8 @@ def faceless_member_line(where: str, kind: str, scene: Any, data: bytes = b"") -
     geometry = list(scene.geometry.values())
     if any(isinstance(g, trimesh.Trimesh) and len(g.faces) for g in geometry):
         return None
-    lines = _lines_in(data, kind, where)
-    if lines and (points := _points_in(data, kind, where)):
+    points, lines = _faceless_counts(data, kind, where)
+    if lines and points:
         return wireframe_line(where, points, lines)
     points = sum(len(g.vertices) for g in geometry if isinstance(g, (trimesh.PointCloud, trimesh.Trimesh)))
     if points:
