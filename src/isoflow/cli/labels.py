@@ -1205,7 +1205,7 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
 
     if ahead is not None:  # each file is read back as soon as it is written (and an STL is written by trimesh)
         ahead.join()
-    problems, unread = [], {}  # label file -> why it was not read back
+    problems, unread = [], {}  # label file -> why its read-back is skipped (it would not fit in memory)
     count, kinds = 0, {}  # faces written, of each kind (a label with edge midpoints: triangles in PLY)
     welds = {}  # label file -> the contacts STL cannot keep apart
     moved = {"moved": 0.0, "moved_voxels": 0.0}  # the farthest float32 moved an STL's corners, of every file

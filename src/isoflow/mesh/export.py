@@ -72,12 +72,10 @@ POSITION_TOLERANCE = 1e-6
 SURFACE_SUFFIXES = (".ply", ".obj", ".stl", ".glb")
 
 #: what a writer holds beyond a binary PLY's, which
-#: :func:`isoflow.digital.surface.mesh_memory` counts: per face of the mesh,
-#: an ASCII PLY's rows as float64 tables (a 256^3 porous field of 5.8
-#: million faces peaks 460 MB above its binary PLY, 2.04 GB above the
-#: check) and an OBJ's lines (of triangles: 271 MB above, 1.85 GB); an STL's records are made by trimesh, whose imports
-#: take 64 MB (a 256^3 ball's STL peaked 90 MB above the check, its
-#: estimate 75 MB). docs/surface.md, "Memory: the check before meshing"
+#: :func:`isoflow.digital.surface.mesh_memory` counts (measured, rounded
+#: up: docs/surface.md, "Memory: the check before meshing"): per face of
+#: the mesh, an ASCII PLY's rows as float64 tables and an OBJ's lines; an
+#: STL's records are made by trimesh, whose imports it loads
 WRITE_BYTES_PER_FACE = {"ascii": 100, ".obj": 60}
 WRITE_BYTES_STL = 72 << 20
 

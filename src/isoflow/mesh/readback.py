@@ -147,34 +147,28 @@ def agreed_volume_words(read_units: float, voxels: int, spacing) -> str:
     return counted if read == counted else f"{counted} (read within the move of the corners)"
 
 
-#: peak bytes of the read-back: a fixed part, by what this process has
-#: not loaded yet (which a run without the read-back never loads; measured
-#: around the read-back of a 3,792-triangle file, PLY, STL or GLB alike,
-#: with each loaded before or not; docs/surface.md): trimesh's and its
-#: readers' imports (67.6 to 79.4 MB), numba's start where no compiled
-#: pass has run yet (its import and the implementation modules its first
-#: call imports: 100.6 to 113.4 MB; ``surface --labels`` of small labels
-#: meshes without it), and the read-back's own compiled passes, loaded
-#: from numba's cache (1.2 to 2.3 MB), with about 10 % to spare
+#: peak bytes of the read-back (each measured, with about 10 % to spare:
+#: docs/surface.md, "Memory: the check before meshing"): a fixed part, by
+#: what this process has not loaded yet, as imports done once cost nothing
+#: more: trimesh's and its readers' imports, numba's start where no
+#: compiled pass has run yet (``surface --labels`` of small labels meshes
+#: without one), and the read-back's own compiled passes, loaded from
+#: numba's cache
 READBACK_BYTES_TRIMESH = 88 << 20
 READBACK_BYTES_NUMBA = 125 << 20
 READBACK_BYTES_LOADED = 8 << 20
-#: all three: a process that has loaded neither (181 MB measured)
+#: all three: a process that has loaded neither
 READBACK_BYTES_FIXED = READBACK_BYTES_TRIMESH + READBACK_BYTES_NUMBA + READBACK_BYTES_LOADED
-#: and per triangle of a binary file (docs/surface.md, "Memory: the check
-#: before meshing"), by suffix (measured on the 11.5 million triangles of a 256^3 porous
-#: field: 99 for a PLY, 225 for an STL, whose positions are welded and its
-#: area summed, 69 for a GLB), with about 10 % to spare and rounded up. The STL's weld
-#: hashes its corners in a table of a power of two entries, 2 to 4 a
-#: corner: 4 on that field (187 bytes a triangle on a 192^3 one, 2.3 a
-#: corner), so its most is what was measured there
+#: and per triangle of a binary file, by suffix: an STL's positions are
+#: welded and its area summed, the weld hashing its corners in a table of
+#: a power of two entries, 2 to 4 a corner, so its figure is taken where
+#: the table is 4 a corner, the most it holds
 READBACK_BYTES_PER_TRIANGLE = {".ply": 150, ".stl": 250, ".glb": 100}
 READBACK_BYTES_OTHER = 400
 #: and per line of a text file (a vertex or a face): an OBJ, read as
-#: arrays of its bytes (measured 271 to 275 there; 347 allocated on a
-#: 40^3 field of 51,000 triangles), and an ASCII PLY, which trimesh's parse
-#: holds as a string and an array a line (463 to 468); the lines are the
-#: file's, so an OBJ or a PLY of triangles is asked for its own
+#: arrays of its bytes, and an ASCII PLY, which trimesh's parse holds as a
+#: string and an array a line; the lines are the file's, so an OBJ or a
+#: PLY of triangles is asked for its own
 READBACK_BYTES_PER_LINE = {".obj": 380, ".ply": 520}
 
 

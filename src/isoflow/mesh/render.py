@@ -16,9 +16,8 @@ from .export import gamma_colours
 #: most faces drawn in one picture; beyond it a random subset is drawn
 FACE_BUDGET = 60_000
 #: peak bytes a picture adds: matplotlib's imports and the figure of at
-#: most FACE_BUDGET faces (``surface --png`` added 94 MB to the peak of a
-#: 256^3 ball, nothing measurable to a porous field's, whose meshing peaks
-#: above it; docs/surface.md, "Memory: the check before meshing")
+#: most FACE_BUDGET faces (measured, rounded up: docs/surface.md, "Memory:
+#: the check before meshing"; a large mesh's meshing peaks above it)
 PICTURE_BYTES = 100 << 20
 
 
