@@ -10,8 +10,13 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import sys
 from pathlib import Path
 from types import ModuleType
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from sphinx.application import Sphinx
 
 #: subpackage -> section title, in the page's order
 PARTS = {
@@ -81,3 +86,65 @@ def write(path: Path, package: ModuleType) -> None:
     text = page(package)
     if not path.exists() or path.read_text() != text:
         path.write_text(text)
+
+
+def public_target(package: ModuleType, target: str) -> str | None:
+    """``isoflow.NAME...`` where ``target`` names a public object by the
+    module that defines it (``isoflow.digital.topology.euler_characteristic``,
+    ``isoflow.digital.lattice.DigitalObject.world``), else None: the API
+    documents it under ``isoflow`` alone, so the internal path has no page."""
+    parts = target.split(".")
+    if parts[0] != package.__name__:
+        return None
+    for cut in range(len(parts) - 1, 1, -1):
+        module = sys.modules.get(".".join(parts[:cut]))
+        if module is None:
+            continue
+        name = parts[cut]
+        public = name in package.__all__ and getattr(module, name, None) is getattr(package, name)
+        return ".".join([package.__name__, *parts[cut:]]) if public else None
+    return None
+
+
+def constant_doc(package: ModuleType, name: str) -> list[str] | None:
+    """The ``#:`` comment above a public constant where its module defines it
+    (``name``: ``isoflow.CLASS_LABELS``), else None. Autodoc looks for it in
+    ``isoflow/__init__.py``, which only loads the name, and falls back on
+    the docstring of the value's type: a tuple's, "Built-in immutable
+    sequence"."""
+    from sphinx.errors import PycodeError
+    from sphinx.pycode import ModuleAnalyzer
+
+    short = name.rpartition(".")[2]
+    if short not in package.__all__:
+        return None
+    value = getattr(package, short)
+    for modname, module in sorted(sys.modules.items()):
+        if not modname.startswith(package.__name__ + ".") or vars(module).get(short) is not value:
+            continue
+        try:
+            lines = ModuleAnalyzer.for_module(modname).find_attr_docs().get(("", short))
+        except PycodeError:
+            continue
+        if lines:
+            return list(lines)
+    return None
+
+
+def connect(app: Sphinx, package: ModuleType) -> None:
+    """Resolve references by internal paths to the public pages and give
+    constants their comments (conf.py's ``setup``)."""
+
+    def resolve(app, env, node, contnode):  # Sphinx's missing-reference event
+        target = public_target(package, node.get("reftarget", "")) if node.get("refdomain") == "py" else None
+        if target is None:
+            return None
+        return env.get_domain("py").resolve_xref(env, node["refdoc"], app.builder, node["reftype"], target, node, contnode)
+
+    def document(app, what, name, obj, options, lines):  # autodoc-process-docstring
+        found = constant_doc(package, name) if what == "data" else None
+        if found is not None:
+            lines[:] = found
+
+    app.connect("missing-reference", resolve)
+    app.connect("autodoc-process-docstring", document, priority=400)  # before numpydoc's (500) reads the lines

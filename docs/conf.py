@@ -52,12 +52,13 @@ myst_heading_anchors = 3
 # isoflow.__all__ before the build reads it)
 autosummary_generate = True
 autosummary_imported_members = True
-autodoc_default_options = {"members": False}
+# no autodoc_default_options: "members": False there overrides the class
+# template's :members:, which leaves a class's page its docstring alone
 autodoc_typehints = "none"  # numpydoc's Parameters section says the types
 numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
 numpydoc_xref_param_type = False
-templates_path = ["_templates"]  # autosummary/class.rst: a class's page documents its members
+templates_path = ["_templates"]  # autosummary/class.rst: a class's page documents its members, to_dict too
 
 # Every reference must resolve (-n with -W), except those that public
 # docstrings make into the package's internal modules and to bare names
@@ -69,6 +70,12 @@ nitpick_ignore_regex = [
     (r"py:.*", r"_?[A-Za-z][A-Za-z0-9_]*"),
 ]
 api_pages.write(DOCS / "api.rst", isoflow)
+
+
+def setup(app) -> None:
+    # a public name referred to by its defining module links to its page;
+    # a constant's page shows its comment, not its type's docstring
+    api_pages.connect(app, isoflow)
 
 sphinx_gallery_conf = {
     "examples_dirs": str(ROOT / "examples"),

@@ -304,7 +304,23 @@ class Result(Mapping[str, Any]):
         return len(self) == len(other) and all(k in other and same_values(self[k], other[k]) for k in self)
 
     def to_dict(self) -> dict[str, Any]:
-        """The result as plain dicts, lists and numbers (what ``--json`` prints)."""
+        """The result as plain dicts, lists and numbers (what ``--json`` prints).
+
+        Returns
+        -------
+        dict
+            The fields that are keys, in their order, with tuples as lists
+            and NumPy scalars and arrays as Python numbers and lists, so
+            that ``json.dumps`` takes it.
+
+        Examples
+        --------
+        >>> import json
+        >>> from isoflow import analyze
+        >>> report = analyze(np.ones((2, 2, 2), bool))
+        >>> json.loads(json.dumps(report.to_dict()))["betti"]
+        [1, 0, 0]
+        """
         return {k: json_ready(getattr(self, k)) for k in self._keys()}
 
     @classmethod

@@ -202,7 +202,7 @@ class Report(Result):
 
     @classmethod
     def from_dict(cls, values: Mapping[str, Any]) -> Report:
-        """The report with the given fields, as :meth:`Result.from_dict`; a
+        """The report with the given fields (a key it does not know is refused); a
         4D report's ``classes``, keyed by configuration, get their integer
         keys back from JSON, whose keys are strings (the report read back
         was not equal to the one written). What ``isoflow info --json``

@@ -71,7 +71,7 @@ class Note:
 class GenusVerdict(Result):
     """What :func:`~isoflow.mesh.genus.verify_genus` found, as fields and as
     a mapping of the keys ``isoflow genus --json`` prints (``v.agree``,
-    ``v["agree"]``); :meth:`to_dict` is that JSON object.
+    ``v["agree"]``); :meth:`~GenusVerdict.to_dict` is that JSON object.
 
     ``reference`` is the genus the digital genus is compared with, taken
     from ``reference_source`` (``"mesh"``: the mesh's own genus; ``"solid"``:
