@@ -16,6 +16,8 @@ import io
 import json
 import re
 import shlex
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -349,6 +351,44 @@ def test_the_readme_s_label_table_of_a_file_is_in_its_world_units(tmp_path):
     nibabel.save(nibabel.Nifti1Image(image, np.diag([0.5, 0.5, 2.0, 1.0])), tmp_path / "seg.nii.gz")
     table = isoflow.label_table(isoflow.read_labels(tmp_path / "seg.nii.gz"))
     assert table["voxels"].tolist() == [8] and table["volume"].tolist() == [8 * 0.5 * 0.5 * 2.0]
+
+
+def test_cli_md_s_calibration_and_measure_lines_are_one_file_s(tmp_path):
+    """cli.md quoted info's calibration line and measure lines as of one
+    file, but no file gives them: voxels of 0.5 x 0.5 x 2 mm at the origin
+    0 have no corner at 1.25 or 2.45, nor 939.4 of them a volume of 469.7
+    mm^3. Its example is a ball in such a NIfTI file; the lines are worked
+    out here from the voxels with NumPy, and the page and the command give
+    them alike."""
+    import nibabel
+
+    pitch = np.array([0.5, 0.5, 2.0])
+    i, j, k = np.indices((16, 18, 10))
+    ball = ((i - 8) * 0.5) ** 2 + ((j - 9.5) * 0.5) ** 2 + ((k - 5) * 2.0) ** 2 <= 3.5**2
+    affine = np.diag([*pitch, 1.0])
+    affine[:3, 3] = pitch / 2  # NIfTI places voxel centres: voxel 0's lowest corner at 0
+    image = nibabel.Nifti1Image(ball.astype(np.uint8), affine)
+    image.header.set_xyzt_units("mm")
+    nibabel.save(image, tmp_path / "ball.nii.gz")
+
+    faces = [np.count_nonzero(np.diff(np.pad(ball, 1), axis=a)) for a in range(3)]
+    area = sum(n * np.prod(np.delete(pitch, a)) for a, n in enumerate(faces))
+    voxels = np.argwhere(ball)
+    low, high, centre = voxels.min(0) * pitch, (voxels.max(0) + 1) * pitch, (voxels.mean(0) + 0.5) * pitch
+    listed = lambda v: ", ".join(f"{x:g}" for x in v)
+    quoted = ["voxel size 0.5 x 0.5 x 2 mm, origin [0, 0, 0] mm, frame RAS",
+              f"volume {len(voxels) * pitch.prod():g} mm^3, surface area {area:g} mm^2",
+              f"bounding box [{listed(low)}] to [{listed(high)}] mm, centroid [{listed(centre)}] mm"]
+
+    page = " ".join((ROOT / "docs" / "cli.md").read_text().split())
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", "ball.nii.gz"], capture_output=True, text=True,
+                          cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    printed = [" ".join(line.split()) for line in done.stdout.splitlines()[1:4]]
+    assert printed == quoted
+    for line in quoted:
+        assert f"`{line}`" in page, line
+    assert f"({len(voxels)} voxels)" in page
 
 
 def test_getting_started_says_which_values_a_file_may_hold(tmp_path):
