@@ -372,3 +372,73 @@ def test_a_semicolon_csv_reads_by_its_header_and_a_quoted_comma_stays_in_its_nam
                            "--json", "--no-surfaces", "-q"], capture_output=True, text=True)
     assert done.returncode == 0 and done.stderr == "", done.stderr
     assert {r["label"]: r["name"] for r in json.loads(done.stdout)["labels"]} == want
+
+
+@pytest.mark.parametrize(("name", "text", "delimiter"), [
+    ("names.csv", "2;white matter\n17;hippocampus, left\n53;right hippocampus\n", ";"),
+    ("names.txt", "2;white matter\r\n17;hippocampus, left\r\n53;right hippocampus\r\n", ";"),
+    ("names.csv", '2,white matter\n17,"hippocampus, left"\n53,right hippocampus\n', ","),
+    ("names.tsv", "2\twhite matter\n17\thippocampus, left\n53\tright hippocampus\n", "\t"),
+])
+def test_a_table_without_a_header_reads_its_label_and_name_cells(tmp_path, seg, name, text, delimiter):
+    """``1;liver`` (a European Excel's CSV without a header row) was refused
+    as having no header naming a label and a name column, as ``1,liver``
+    was, where the plain list ``1 liver`` reads. Each row of two cells is a
+    label and its name, as Python's csv module splits it; a quoted name
+    keeps its comma."""
+    path = tmp_path / name
+    path.write_bytes(text.encode())
+    want = {int(k): v for k, v in csv.reader(io.StringIO(text), delimiter=delimiter)}
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(seg), "--labels", "--names", str(path),
+                           "--json", "--no-surfaces", "-q"], capture_output=True, text=True)
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+    assert {r["label"]: r["name"] for r in json.loads(done.stdout)["labels"]} == want
+
+
+@pytest.mark.parametrize(("text", "delimiter"), [
+    ("sep=;\nindex;name\n2;white matter\n17;hippocampus, left\n53;right hippocampus\n", ";"),
+    ("sep=;\r\n2;white matter\r\n17;hippocampus, left\r\n53;right hippocampus\r\n", ";"),
+    ("sep=,\nlabel,name\n2,white matter\n17,hippocampus; left\n53,right hippocampus\n", ","),
+    ("SEP=|\n2|white matter\n17|hippocampus; left, too\n53|right hippocampus\n", "|"),
+])
+def test_excels_sep_line_declares_the_separator_and_is_no_row(tmp_path, seg, text, delimiter):
+    """Excel writes (and reads) a first line ``sep=;`` that names the
+    separator of the cells below; it was taken for the header and refused
+    ("a header naming a label column ... is expected, not 'sep=;'"). The
+    line is skipped and its separator used, even where another would split
+    the header (``hippocampus; left`` stays one name under ``sep=,``)."""
+    path = tmp_path / "names.csv"
+    path.write_text(text, newline="")
+    rows = list(csv.reader(io.StringIO(text), delimiter=delimiter))[1:]
+    want = {int(k): v for k, v in rows if k.isdigit()}
+    assert len(want) == 3
+    for command in (["info", str(seg), "--labels", "--json", "--no-surfaces"],
+                    ["surface", str(seg), "--labels", "-o", str(tmp_path / "s.glb")]):
+        done = subprocess.run([sys.executable, "-m", "isoflow", *command, "--names", str(path), "-q"],
+                              capture_output=True, text=True)
+        assert done.returncode == 0 and done.stderr == "", done.stderr
+    assert {r["label"]: r["name"] for r in json.loads(subprocess.run(
+        [sys.executable, "-m", "isoflow", "info", str(seg), "--labels", "--json", "--no-surfaces", "-q", "--names",
+         str(path)], capture_output=True, text=True).stdout)["labels"]} == want
+    data = (tmp_path / "s.glb").read_bytes()
+    # the GLB's JSON chunk, as the glTF 2.0 specification lays it out: header, chunk length, "JSON"
+    length, kind = struct.unpack_from("<I4s", data, 12)
+    assert kind == b"JSON"
+    nodes = json.loads(data[20:20 + length])["nodes"]
+    assert {int(n["name"].removeprefix("label_")): n["extras"]["name"] for n in nodes} == want
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ("2,white matter\n17,hippocampus, left\n", "line 2: a row 'label,name' of two cells is expected, as line 1 is, "
+                                               "not '17,hippocampus, left'"),
+    ("sep=;\n2 white matter\n", "line 2: a header naming a label column"),
+    ("sep=;\n", "holds no label names (no line after its 'sep=;')"),
+    ("2;17\n3;18\n", "holds numbers, not label names"),
+])
+def test_a_table_without_a_header_that_is_no_list_of_names_is_one_line(tmp_path, seg, text, words):
+    path = tmp_path / "names.csv"
+    path.write_text(text)
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(seg), "--labels", "--names", str(path)],
+                          capture_output=True, text=True)
+    assert done.returncode == 2 and done.stdout == "" and len(done.stderr.splitlines()) == 1, done.stderr
+    assert done.stderr.startswith(f"isoflow info: error: --names {path}: ") and words in done.stderr, done.stderr

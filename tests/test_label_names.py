@@ -190,7 +190,7 @@ def test_nifti_says_once_that_it_keeps_no_names_and_nothing_without_names(tmp_pa
     assert isoflow.read_labels(tmp_path / "seg.nii.gz").names is None
 
 
-@pytest.mark.parametrize("names", [{0: "background"}, {1.0: "a"}, {1: 3}, ["a\nb"], "ab"])
+@pytest.mark.parametrize("names", [{0: "background"}, {1.5: "a"}, {1: 3}, ["a\nb"], "ab"])
 def test_names_that_are_no_label_names_are_refused(tmp_path, image, names):
     with pytest.raises(IsoflowError):
         isoflow.write_labels(image, tmp_path / "seg.nrrd", names=names)

@@ -184,7 +184,8 @@ def test_an_mgz_far_from_the_origin_says_how_far_float32_moves_its_voxels(tmp_pa
     the move the file's numbers make; near the origin nothing is said."""
     vol = np.zeros((64, 64, 16), bool)
     vol[1:-1, 1:-1, 1:-1] = True
-    far = isoflow.DigitalObject(vol, pitch=0.04, origin=(999998.7123, 0, 0))  # its centre no float32 number
+    # its centre no float32 number; in mm, MGH's unit (a volume without one gets a note of its own)
+    far = isoflow.DigitalObject(vol, pitch=0.04, origin=(999998.7123, 0, 0), unit="mm")
     with pytest.warns(IsoflowWarning, match=r"MGH stores the voxel-to-world map as float32, which moves this "
                                             r"volume's voxels by up to (\S+) voxels") as caught:
         path = isoflow.write_volume(far, tmp_path / "far.mgz")
@@ -197,7 +198,7 @@ def test_an_mgz_far_from_the_origin_says_how_far_float32_moves_its_voxels(tmp_pa
     placed = centre + size * (ends - np.array([64, 64, 16]) / 2)
     moved = np.abs(placed - (far.origin + 0.04 * (ends + 0.5))).max() / 0.04
     assert moved > 1e-3 and said == pytest.approx(moved, rel=1e-2)
-    near = isoflow.DigitalObject(vol, pitch=0.04, origin=(-1.5, 2.0, 0.25))
+    near = isoflow.DigitalObject(vol, pitch=0.04, origin=(-1.5, 2.0, 0.25), unit="mm")
     with warnings.catch_warnings():
         warnings.simplefilter("error", IsoflowWarning)
         isoflow.write_volume(near, tmp_path / "near.mgz")
@@ -310,3 +311,37 @@ def test_an_origin_that_float32_holds_reads_back_exactly(tmp_path, capsys, suffi
     assert checked >= 3
     out = run(capsys, "info", tmp_path / f"o0.0{suffix}")
     assert "origin [0, 0, 0]" in out
+
+
+def test_a_volume_without_a_unit_written_as_mgz_says_once_that_it_reads_back_in_mm(tmp_path):
+    """MGH's sizes are millimetres by definition (FreeSurfer's format has
+    no unit field): a volume without a unit (a voxelised STL,
+    a bare array) written as .mgz was read back in mm without a word, a
+    unit the volume never had. One warning line says so as it is written;
+    a volume in mm writes without one, and one in µm keeps its warning."""
+    import subprocess
+    import sys
+
+    box = isoflow_box(tmp_path)
+    out = tmp_path / "box.mgz"
+    done = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(box), "--resolution", "4", "-o", str(out)],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    lines = [line for line in done.stderr.splitlines() if "numba is compiling" not in line]
+    assert lines == [f"isoflow voxelize: warning: {out}: the volume has no length unit and MGH's is mm by definition: "
+                     "its voxel size and origin are written as given and read back as mm"], lines
+    # the numbers as given (trimesh's unit box at resolution 4: 0.25), which every reader takes as mm
+    assert nib.load(out).header.get_zooms()[:3] == (0.25, 0.25, 0.25)
+    info = subprocess.run([sys.executable, "-m", "isoflow", "info", str(out), "--json"], capture_output=True, text=True)
+    assert info.returncode == 0 and json.loads(info.stdout)["unit"] == "mm"
+    vol = np.ones((2, 2, 2), bool)
+    for unit, said in ((None, ["no length unit"]), ("mm", []), ("micron", ["the unit µm"])):
+        for write in (lambda p, u=unit: isoflow.write_volume(isoflow.DigitalObject(vol, unit=u), p),
+                      lambda p, u=unit: isoflow.write_labels(vol.astype(np.uint8), p, unit=u)):
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                path = write(tmp_path / f"v{unit}.mgz")
+            messages = [str(w.message) for w in caught if issubclass(w.category, IsoflowWarning)]
+            assert len(messages) == len(said) and all(s in m for s, m in zip(said, messages)), messages
+            assert isoflow.read_labels(path).unit == "mm"
+            path.unlink()

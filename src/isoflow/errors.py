@@ -195,9 +195,9 @@ def scalar_given(value: object) -> object:
     Returns
     -------
     object
-        ``value[()]`` for a 0D array (a NumPy scalar: an integer passes the
-        checks that take NumPy's integers, a bool or a float is refused as
-        before), ``value`` for anything else.
+        ``value[()]`` for a 0D array (a NumPy scalar, which
+        :func:`whole_given` takes or refuses as it does the scalar),
+        ``value`` for anything else.
 
     Examples
     --------
@@ -211,6 +211,51 @@ def scalar_given(value: object) -> object:
             and not isinstance(value, (str, bytes)):
         return value[()]
     return value
+
+
+def whole_given(value: object) -> int | None:
+    """The integer an integer argument of the public API gives, or None
+    where it gives none: the one rule that every such argument follows
+    (``connectivity``, ``resolution``, ``steps``, ``threads``, ``time``,
+    labels asked for, ...).
+
+    A whole number is taken as a Python ``int``, a NumPy integer, or a
+    float (Python's or NumPy's) that is whole: ``6.0`` is 6, as arithmetic
+    (``n / 2 * 2``, a ``float64`` column) gives it. A bool is none, though
+    ``True`` equals 1, nor is a float with a fraction (``6.5``), NaN, an
+    infinity, a string, a ``Fraction`` or a ``Decimal``. A 0D array is the
+    scalar it holds (:func:`scalar_given`). The caller says which range it
+    takes and names the argument and its value where this gives None.
+
+    Parameters
+    ----------
+    value : object
+        An integer argument, as given.
+
+    Returns
+    -------
+    int or None
+        The Python integer, or None where ``value`` is no whole number.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> whole_given(6), whole_given(np.int64(6)), whole_given(6.0), whole_given(np.array(26.0))
+    (6, 6, 6, 26)
+    >>> whole_given(6.5), whole_given(True), whole_given(float("nan")), whole_given("6")
+    (None, None, None, None)
+    """
+    value = scalar_given(value)
+    # NumPy's scalars by their dtype: errors.py is imported before NumPy is needed
+    kind = getattr(getattr(value, "dtype", None), "kind", None) if getattr(value, "shape", None) == () else None
+    if isinstance(value, bool) or kind == "b":
+        return None
+    if isinstance(value, int) or kind in ("i", "u"):
+        return int(value)  # type: ignore[call-overload]  # an integer, as just checked
+    if isinstance(value, float) or kind == "f":
+        number = float(value)  # type: ignore[arg-type]  # a float, as just checked
+        return int(number) if math.isfinite(number) and number.is_integer() else None
+    return None
 
 
 def _python_scalar(value: object) -> object:

@@ -503,13 +503,13 @@ def test_pieces_beyond_the_budget_are_refused_naming_the_layers_that_fit(monkeyp
     assert 1 <= fit < 40 and list(table["voxels"]) == np.bincount(vol[:fit].reshape(-1))[1:].tolist()
 
 
-@pytest.mark.parametrize("label", [1.0, True, np.True_, np.float64(1.0), np.float32(1.0)])
+@pytest.mark.parametrize("label", [1.5, True, np.True_, np.float64(1.5), np.float32(1.5)])
 def test_a_label_asked_for_as_a_float_or_a_bool_is_refused(label):
-    """``labels=[1.0]`` and ``labels=[True]`` were taken as label 1: a
-    choice of labels is integers, and the refusal names the value."""
+    """``labels=[True]`` was taken as label 1, and ``1.5`` cut to it: a
+    choice of labels is whole numbers, and the refusal names the value
+    (a whole float, ``1.0``, is label 1: tests/test_integer_arguments.py)."""
     image = np.zeros((4, 4, 4), np.uint8)
     image[1:3, 1:3, 1:3] = 1
-    assert label == 1  # equal to label 1, which is why it was read as that label
     shown = repr(label.item() if isinstance(label, np.generic) else label)  # a NumPy scalar as the value it holds
     with pytest.raises(ValueError, match=re.escape(f"label {shown} is not an integer")):
         label_table(image, labels=[label])

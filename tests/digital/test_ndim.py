@@ -561,7 +561,7 @@ def test_symmetry_indices_and_codes_that_are_none_are_refused():
     Definition 9 by hand)."""
     # an index that is no integer: 2.5 was cut to 2 by the range check, then
     # NumPy's IndexError; True would be element 1
-    for g in (2.5, True, "3"):
+    for g in (2.5, True, "3"):  # (2.0 is element 2)
         with pytest.raises(IsoflowError, match=f"symmetry index must be an integer 0..7, got {g!r}"):
             S.apply_symmetry(np.zeros((2, 2), dtype=bool), g)
     # codes that are no codes: 5 and 0.5 counted as flat (index 0), a string

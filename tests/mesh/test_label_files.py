@@ -219,7 +219,8 @@ def test_each_format_keeps_the_voxel_size_and_origin_the_docs_say_and_warns_of_t
     assert np.allclose(back.origin, origin) == place.startswith("kept"), (place, back.origin)
     if not place.startswith("kept"):
         assert back.origin.tolist() == [0.0] * image.ndim
-    lost = [str(w.message) for w in said if issubclass(w.category, IsoflowWarning)]
+    # (MGH's note that a volume without a unit is read back in mm is of the unit, not of the placement)
+    lost = [str(w.message) for w in said if issubclass(w.category, IsoflowWarning) and "no length unit" not in str(w.message)]
     assert bool(lost) == ("not kept" in (size, place)), lost
     if place == "not kept":
         assert len(lost) == 1 and str(path) in lost[0] and "origin" in lost[0] and "not" in lost[0]

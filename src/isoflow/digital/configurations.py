@@ -32,7 +32,7 @@ from functools import cache
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, given_text, scalar_given
+from ..errors import IsoflowError, given_text, whole_given
 from ..results import read_only
 from ..scale import arrays
 from ..scale.compiled import Method, use_compiled
@@ -46,12 +46,12 @@ DIMENSIONS = (1, 2, 3, 4)
 def check_dimension(n: object, name: str = "dimension n") -> int:
     """The dimension of a window, an integer 1..4, or one line saying why
     not, naming it as its caller's parameter ``name``."""
-    n = scalar_given(n)
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+    whole = whole_given(n)
+    if whole is None:
         raise IsoflowError(f"{name} must be an integer 1..{MAX_DIM}, got {given_text(n)}")
-    if not 1 <= int(n) <= MAX_DIM:
-        raise IsoflowError(f"{name} must be 1..{MAX_DIM}, got {n}")
-    return int(n)
+    if not 1 <= whole <= MAX_DIM:
+        raise IsoflowError(f"{name} must be 1..{MAX_DIM}, got {given_text(n)}")
+    return whole
 
 
 def octant_bit(d: Sequence[int]) -> int:
@@ -311,9 +311,11 @@ def configuration_histogram(volume: ArrayLike, slab: int | np.integer | None = N
     """
     # checked before any pass: the NumPy passes step through the volume by
     # it, and the compiled kernel, which takes no slab, would not look at it
-    slab = scalar_given(slab)  # type: ignore[assignment]  # a 0D array of an integer is that integer
-    if slab is not None and (isinstance(slab, (bool, np.bool_)) or not isinstance(slab, (int, np.integer)) or slab < 1):
-        raise IsoflowError(f"slab must be an integer >= 1, got {given_text(slab)}")
+    if slab is not None:
+        whole = whole_given(slab)
+        if whole is None or whole < 1:
+            raise IsoflowError(f"slab must be an integer >= 1, got {given_text(slab)}")
+        slab = whole
     xp, v = arrays.as_volume(volume, dims=DIMENSIONS)
     size = 1 << (1 << v.ndim)
     if v.size == 0:

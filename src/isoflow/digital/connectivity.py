@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import IsoflowError, given_text, scalar_given
+from ..errors import IsoflowError, given_text, whole_given
 
 #: (face adjacency 2n, full adjacency 3^n - 1) per dimension
 VALID = {1: (2, 2), 2: (4, 8), 3: (6, 26), 4: (8, 80)}
@@ -21,30 +21,30 @@ VALID = {1: (2, 2), 2: (4, 8), 3: (6, 26), 4: (8, 80)}
 def check_connectivity(ndim: int, connectivity: int | np.integer) -> int:
     """The object's connectivity, checked against the dimension.
 
-    A connectivity counts neighbours: an integer (Python's, NumPy's, or a
-    0D array of one, as ``np.load`` gives a saved number), never a bool
-    (``True`` equals 1) or a float (``6.0`` equals 6 but is no count).
+    A connectivity counts neighbours: a whole number, as every integer
+    argument takes one (:func:`~isoflow.errors.whole_given`: an ``int``, a
+    NumPy integer, a whole float such as ``6.0``, or a 0D array of one),
+    never a bool (``True`` equals 1), ``6.5`` or the text ``"6"``.
 
     Examples
     --------
-    >>> check_connectivity(3, 26), check_connectivity(3, np.array(26))
-    (26, 26)
-    >>> check_connectivity(3, 6.0)
+    >>> check_connectivity(3, 26), check_connectivity(3, np.array(26)), check_connectivity(3, 6.0)
+    (26, 26, 6)
+    >>> check_connectivity(3, 6.5)
     Traceback (most recent call last):
     ...
-    isoflow.errors.IsoflowError: connectivity 6.0 is not valid in 3D: it must be an integer (use 6 or 26)
+    isoflow.errors.IsoflowError: connectivity 6.5 is not valid in 3D: it must be an integer (use 6 or 26)
     """
     allowed = " or ".join(map(str, sorted(set(VALID.get(ndim, ())))))
-    connectivity = scalar_given(connectivity)  # type: ignore[assignment]  # checked below as any value
-    if isinstance(connectivity, bool) or not isinstance(connectivity, (int, np.integer)):
+    whole = whole_given(connectivity)
+    if whole is None:
         # text quoted: "connectivity 6 is not valid in 3D" of '6' contradicts itself
         raise IsoflowError(f"connectivity {given_text(connectivity)} is not valid in {ndim}D: it must be an integer "
                            f"(use {allowed})")
-    if connectivity not in VALID.get(ndim, ()):
+    if whole not in VALID.get(ndim, ()):
         raise IsoflowError(f"connectivity {given_text(connectivity)} is not valid in {ndim}D (use {allowed})")
-    # a Python int: numpy.int64(6) passes the test above, and the value
-    # returned is what reports and JSON show
-    return int(connectivity)
+    # a Python int, whatever was given: the value returned is what reports and JSON show
+    return whole
 
 
 def default_connectivity(ndim: int) -> int:

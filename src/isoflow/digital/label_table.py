@@ -42,7 +42,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, check_switch, given_text, scalar_given, warn
+from ..errors import IsoflowError, check_switch, given_text, scalar_given, warn, whole_given
 from ..results import fields_repr, same_fields
 from ..scale.arrays import FILL_READ, FILL_ZERO, as_array, fill_as, refuse_object
 from ..scale.memory import check_fits
@@ -209,13 +209,14 @@ def label_names(names: Mapping[int, str] | Sequence[str] | None, where: str) -> 
     pairs = names.items() if isinstance(names, Mapping) else enumerate(list(names), 1)
     found: dict[int, str] = {}
     for label, name in pairs:
-        if isinstance(label, (bool, np.bool_)) or not isinstance(label, (int, np.integer)) or label == 0:
+        whole = whole_given(label)
+        if whole is None or whole == 0:
             raise IsoflowError(f"{where}: a label name is given for {given_text(label)}, and labels are named "
                                "by nonzero integers (0 is the background)")
         if not isinstance(name, str) or "\n" in name or "\r" in name:
-            raise IsoflowError(f"{where}: the name of label {int(label)} is {given_text(name)}, not a string of "
+            raise IsoflowError(f"{where}: the name of label {whole} is {given_text(name)}, not a string of "
                                "one line")
-        found[int(label)] = str(name)  # a np.str_ (of an array of names) as the plain string
+        found[whole] = str(name)  # a np.str_ (of an array of names) as the plain string
     return dict(sorted(found.items()))
 
 
@@ -589,23 +590,25 @@ def every_other_boxes(vol: np.ndarray) -> int:
 
 
 def wanted_labels(labels, dtype) -> np.ndarray:
-    """The labels asked for, as values of the image's type: each one an
-    integer (not a float or a bool) the type holds, none twice."""
+    """The labels asked for, as values of the image's type: each one a
+    whole number (:func:`~isoflow.errors.whole_given`: not ``1.5`` or a
+    bool) the type holds, none twice."""
     if isinstance(labels, Iterable) and not isinstance(labels, (str, bytes, np.ndarray)):
         # a generator, a set, dict keys: their labels in their order (NumPy holds such an object as one value)
         labels = list(labels)
     # a 0D array of an integer (np.load of a saved label) is that integer
     asked: list[Any] = [scalar_given(value) for value in np.atleast_1d(np.asarray(labels, dtype=object)).ravel()]
     info = np.iinfo(label_dtype(dtype))
+    values: list[int] = []
     for value in asked:
-        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
-            # 1.0 or True taken as label 1 would hide a slip (a float column, a mask's values) behind a row
-            raise IsoflowError(f"label {given_text(value)} is not an integer: labels are asked for as integers (Python or "
-                               "NumPy ints)")
-        if not info.min <= int(value) <= info.max:
+        whole = whole_given(value)
+        if whole is None:
+            # True taken as label 1, or 1.5 as label 1, would hide a slip (a mask's values, a mean) behind a row
+            raise IsoflowError(f"label {given_text(value)} is not an integer: labels are asked for as whole numbers")
+        if not info.min <= whole <= info.max:
             raise IsoflowError(f"label {given_text(value)} is not a value the labels of this image hold: they are "
                                f"{np.dtype(dtype)} ({info.min} to {info.max})")
-    values = [int(v) for v in asked]
+        values.append(whole)
     if len(set(values)) != len(values):
         twice = sorted({v for v in values if values.count(v) > 1})
         raise IsoflowError(f"labels asked twice: {', '.join(map(str, twice))}")

@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, counted, given_text, number_text
+from ..errors import IsoflowError, counted, given_text, number_text, whole_given
 from ..results import read_only, same_fields
 from ..scale.arrays import as_array, binary, is_masked_array
 from .frames import space_given
@@ -291,12 +291,13 @@ class DigitalObject:
         >>> place.spacing.tolist(), place.origin.tolist(), place.voxels
         ([0.5, 0.5, 2.0], [1.0, 2.0, 3.0], 0)
         """
-        if isinstance(ndim, (bool, np.bool_)) or not isinstance(ndim, (int, np.integer)):
+        whole = whole_given(ndim)
+        if whole is None:
             # named here, as Python's own error for (1,) * ndim names no argument; another
             # integer than 2, 3, 4 is refused by the constructor, as the array of a file would be
             raise IsoflowError(f"placement: ndim must be 2, 3 or 4, got {given_text(ndim)}")
         given: dict[str, Any] = {"pitch": pitch, "origin": origin, "offset": offset, "parity": parity}
-        return cls(np.zeros((1,) * int(ndim), bool), **{k: v for k, v in given.items() if v is not None})
+        return cls(np.zeros((1,) * whole, bool), **{k: v for k, v in given.items() if v is not None})
 
     # ------------------------------------------------------------ geometry
     @property

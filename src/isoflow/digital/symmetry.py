@@ -15,7 +15,7 @@ from functools import cache
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, given_text
+from ..errors import IsoflowError, given_text, whole_given
 from .configurations import check_dimension, octants, read_only
 
 
@@ -122,8 +122,10 @@ def apply_symmetry(volume: ArrayLike, g: int) -> np.ndarray:
     group = hyperoctahedral_group(x.ndim)
     # an index that is no integer (2.5, True, "3") would be cut or read as
     # another element, or fail in NumPy's indexing
-    if isinstance(g, bool) or not isinstance(g, (int, np.integer)) or not 0 <= int(g) < len(group):
+    index = whole_given(g)
+    if index is None or not 0 <= index < len(group):
         raise IsoflowError(f"symmetry index must be an integer 0..{len(group) - 1}, got {given_text(g)}")
+    g = index
     flip_axes = tuple(int(i) for i in np.flatnonzero(group.flips[g]))
     y = np.flip(x, axis=flip_axes) if flip_axes else x
     return np.transpose(y, tuple(int(i) for i in group.axis_permutations[g]))

@@ -15,7 +15,7 @@ from typing import Any, overload
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, counted, given_text, scalar_given
+from ..errors import IsoflowError, counted, given_text, whole_given
 from ..scale import arrays
 from ..scale.arrays import is_host
 from ..scale.compiled import Method, use_compiled
@@ -242,11 +242,11 @@ def betti_numbers(volume: ArrayLike, connectivity: int | np.integer | None = Non
     conn = resolve_connectivity(v.ndim, connectivity)
     method = _chosen(v, method)  # one choice for the histogram and the labellings
     # b1 = b0 + b2 - chi is a count only for an integer chi
-    chi = scalar_given(chi)  # type: ignore[assignment]  # a 0D array of an integer is that integer
     if chi is not None:
-        if isinstance(chi, (bool, np.bool_)) or not isinstance(chi, (int, np.integer)):
+        whole = whole_given(chi)
+        if whole is None:
             raise IsoflowError(f"chi must be an integer, got {given_text(chi)}")
-        chi = int(chi)  # a NumPy integer gives a list of plain ints, as chi computed here does
+        chi = whole  # a Python int gives a list of plain ints, as chi computed here does
     else:
         chi = euler_from_histogram(configuration_histogram(v, method=method), v.ndim, conn)
     if v.ndim == 1:

@@ -77,7 +77,7 @@ from ..digital.indices import (
     f_lut,
 )
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError
+from ..errors import IsoflowError, whole_given
 from ..results import read_only
 from .planar import planar_moves
 from .segments import segment_moves
@@ -100,8 +100,9 @@ def flow_connectivity(ndim: int, connectivity: int | np.integer | None) -> int:
         raise IsoflowError(f"the digital curvature flow is defined for 2D and 3D objects, not {ndim}D")
     if connectivity is None:
         connectivity = 6
-    if ndim == 2 and isinstance(connectivity, (int, np.integer)) and connectivity in (6, 26):
-        connectivity = {6: 4, 26: 8}[int(connectivity)]
+    planar = {6: 4, 26: 8}.get(whole_given(connectivity)) if ndim == 2 else None  # type: ignore[arg-type]  # None: no key
+    if planar is not None:
+        connectivity = planar
     return check_connectivity(ndim, connectivity)
 
 

@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
 from ..digital.measures import unheld_dropped
-from ..errors import IsoflowError, check_callable, check_switch, given_text, scalar_given
+from ..errors import IsoflowError, check_callable, check_switch, given_text, whole_given
 from ..results import Result
 from .engines import ArrayFlow, Method, flow_engine
 from .motion import flow_connectivity
@@ -237,9 +237,9 @@ class _Guarded:
 
 def check_count(name: str, value) -> int | None:
     """A count of steps as a Python int (None as None), refused where it
-    is not an integer >= 0 (a bool, a float, a negative number), naming
-    the argument. A 0D array of an integer (``np.load`` of a saved number)
-    is the integer it holds.
+    is no whole number >= 0 (a bool, ``1.5``, a negative number), naming
+    the argument; ``3.0`` is 3, as :func:`~isoflow.errors.whole_given`
+    takes every integer argument.
 
     Parameters
     ----------
@@ -259,17 +259,19 @@ def check_count(name: str, value) -> int | None:
 
     Examples
     --------
-    >>> check_count("steps", 3), check_count("steps", np.array(3)), check_count("steps", None)
-    (3, 3, None)
+    >>> check_count("steps", 3), check_count("steps", np.array(3)), check_count("steps", 3.0), check_count("steps", None)
+    (3, 3, 3, None)
     >>> check_count("steps", 1.5)
     Traceback (most recent call last):
     ...
     isoflow.errors.IsoflowError: steps must be an integer >= 0, got 1.5
     """
-    value = scalar_given(value)
-    if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0):
+    if value is None:
+        return None
+    whole = whole_given(value)
+    if whole is None or whole < 0:
         raise IsoflowError(f"{name} must be an integer >= 0, got {given_text(value)}")
-    return None if value is None else int(value)  # an integer, as just checked
+    return whole
 
 
 def _plain(engine: ArrayFlow, state, trace: _Trace, cap: int | None, capped: StopReason,

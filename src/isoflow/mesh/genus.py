@@ -24,7 +24,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
-from ..errors import IsoflowError, check_callable, check_switch, counted, given_text, scalar_given
+from ..errors import IsoflowError, check_callable, check_switch, counted, given_text, scalar_given, whole_given
 from ..scale import memory
 from .crossings import CubeGrid, find_crossings
 from .fills import Fill, Voxelization, check_fill, check_strict
@@ -944,25 +944,25 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] | None
     fill = check_fill(fill)  # before any resolution runs: the verdict compares by it as a string
     # a 0D array is iterable by its type and not by NumPy, which raised TypeError from list()
     if resolutions is None:  # (a cap checked below; one that is not an int keeps the defaults for its refusal)
-        cap = max_resolution if isinstance(max_resolution, (int, np.integer)) else MAX_RESOLUTION
-        resolutions = default_resolutions(max(1, int(cap)))
+        cap = whole_given(max_resolution)
+        resolutions = default_resolutions(max(1, MAX_RESOLUTION if cap is None else cap))
     resolutions = scalar_given(resolutions)  # type: ignore[assignment]  # refused below as one number
     if isinstance(resolutions, (str, bytes)) or not isinstance(resolutions, Iterable):
-        hint = f"; one resolution is [{given_text(resolutions)}]" if isinstance(resolutions, (int, np.integer)) else ""
+        hint = f"; one resolution is [{given_text(resolutions)}]" if whole_given(resolutions) is not None else ""
         raise IsoflowError(f"resolutions must be a sequence of integers, got {given_text(resolutions)}{hint}")
     resolutions = [scalar_given(r) for r in resolutions]  # type: ignore[misc]  # a 0D array of a number is that number
     if not resolutions:
         raise IsoflowError("verify_genus needs at least one resolution")
-    for r in resolutions:  # int() took "32" and 32.5 (as 32) in silence
-        if isinstance(r, (bool, np.bool_)) or not isinstance(r, (int, np.integer, float, np.floating)) \
-                or not (math.isfinite(r) and r == int(r) and r >= 1):
+    wholes = [whole_given(r) for r in resolutions]  # int() took "32" and 32.5 (as 32) in silence
+    for r, whole in zip(resolutions, wholes):
+        if whole is None or whole < 1:
             raise IsoflowError(f"resolutions must be integers >= 1, got {given_text(r)} in {given_text(resolutions)}")
-    max_resolution = scalar_given(max_resolution)  # type: ignore[assignment]  # checked below as any value
-    if isinstance(max_resolution, (bool, np.bool_)) or not isinstance(max_resolution, (int, np.integer)) \
-            or max_resolution < 1:
-        raise IsoflowError(f"max_resolution must be an integer >= 1, got {given_text(max_resolution)}")
+    resolutions = wholes  # type: ignore[assignment]  # Python ints, as just checked
     # the verdict's rows and its JSON hold Python ints, whatever the caller's type
-    max_resolution = int(max_resolution)
+    whole = whole_given(max_resolution)
+    if whole is None or whole < 1:
+        raise IsoflowError(f"max_resolution must be an integer >= 1, got {given_text(max_resolution)}")
+    max_resolution = whole
     # the connectivity a surface isoflow wrote records in its file, read once
     # for the default connectivity and the voxel-contact reference
     written = written_connectivity(mesh) if isinstance(mesh, (str, os.PathLike)) else None

@@ -52,7 +52,7 @@ from numbers import Real
 
 import numpy as np
 
-from ..errors import IsoflowError, given_text, number_text, scalar_given
+from ..errors import IsoflowError, given_text, number_text, scalar_given, whole_given
 from ..scale import memory
 from ..scale.memory import sized
 from .load import mesh_bbox, used_vertices
@@ -110,16 +110,12 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
     lo_s, hi_s = np.ldexp(lo - shift, -e), np.ldexp(hi - shift, -e)
     ext_s = np.ldexp(ext, -e)
     if resolution is not None:
-        resolution = scalar_given(resolution)  # a 0D array of a number is that number
-        if isinstance(resolution, (bool, np.bool_)) or not isinstance(
-                resolution, (int, np.integer, float, np.floating)):
-            raise IsoflowError(f"voxelize: resolution must be an integer >= 1, got {given_text(resolution)}")
-        if not (math.isfinite(resolution) and resolution == int(resolution)
-                and 1 <= resolution <= MAX_RESOLUTION):
+        whole = whole_given(resolution)
+        if whole is None or not 1 <= whole <= MAX_RESOLUTION:
             raise IsoflowError(
                 f"voxelize: resolution must be an integer from 1 to {MAX_RESOLUTION}, "
                 f"got {given_text(resolution)}")
-        res = int(resolution)
+        res = whole
         pitch_s = float(ext_s.max()) / res
         pitch = math.ldexp(pitch_s, e)
         what = f"resolution={res}"

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import IsoflowError, counted, given_text
+from ..errors import IsoflowError, counted, given_text, whole_given
 from .render import pyplot, save_figure
 
 #: the Betti patterns drawn as bars of their own, the most common first;
@@ -136,8 +136,10 @@ def label_panels(table: Mapping[str, np.ndarray], bars: int = PATTERN_BARS) -> L
     >>> panels.size.tolist(), panels.ball.tolist()
     ([27.0, 24.0, 27.0], [True, False, True])
     """
-    if isinstance(bars, bool) or not isinstance(bars, (int, np.integer)) or bars < 1:
+    whole = whole_given(bars)
+    if whole is None or whole < 1:
         raise IsoflowError(f"label_panels: bars must be a positive integer, got {given_text(bars)}")
+    bars = whole
     dimension, size_key, boundary_key, betti_keys = table_columns(table)
     betti = np.stack([np.asarray(table[k], np.int64) for k in betti_keys], axis=1).reshape(-1, len(betti_keys))
     found, counts = np.unique(betti, axis=0, return_counts=True)

@@ -6,11 +6,9 @@ grid that memory does not, to say so when it refuses one).
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from ..errors import IsoflowError, given_text
+from ..errors import IsoflowError, given_text, whole_given
 from .fills import Fill
 
 #: a slab (and so a zarr chunk's first side) holds at most this many voxels
@@ -64,10 +62,10 @@ def check_chunks(chunks: object) -> tuple[int, int, int]:
     """
     sides = list(chunks) if isinstance(chunks, (tuple, list, np.ndarray)) else []
     # each side a whole number >= 1 (a NumPy integer too): 2.5 is no side, and "4" no number
-    if len(sides) != 3 or not all(isinstance(c, (int, float, np.integer, np.floating)) and not isinstance(c, (bool, np.bool_))
-                                  and math.isfinite(c) and c == int(c) and c >= 1 for c in sides):
+    wholes = [whole_given(c) for c in sides]
+    if len(wholes) != 3 or any(c is None or c < 1 for c in wholes):
         raise IsoflowError(f"chunks must be three positive integers, got {given_text(chunks)}")
-    return int(sides[0]), int(sides[1]), int(sides[2])
+    return wholes[0], wholes[1], wholes[2]  # type: ignore[return-value]  # ints, as just checked
 
 
 def slab_layout(shape, chunks=None) -> tuple[tuple[int, int, int], list[tuple[int, int]]]:

@@ -52,7 +52,7 @@ from collections.abc import Iterator
 from functools import cache
 from typing import TYPE_CHECKING, Literal
 
-from ..errors import IsoflowError, choice_of, given_text, scalar_given
+from ..errors import IsoflowError, choice_of, given_text, whole_given
 
 if TYPE_CHECKING:
     import numpy as np
@@ -263,18 +263,20 @@ def check_threads(n, where: str = "threads") -> int:
 
 
 def thread_argument(value: object, name: str = "threads") -> int:
-    """A thread count given to a Python function: an integer >= 1, as the
-    other integer arguments take one (``int``, a NumPy integer or a 0D array
-    of one); anything else refused naming ``name``.
+    """A thread count given to a Python function: a whole number >= 1, as
+    the other integer arguments take one (:func:`~isoflow.errors.whole_given`:
+    ``int``, a NumPy integer, a whole float or a 0D array of one); anything
+    else refused naming ``name``.
 
     :func:`check_threads` reads a count from text (the command line, the
     environment), and so took ``"8"``, ``Fraction(8)`` and ``Decimal("8")``
-    (their text is ``8``) where ``8.0`` was refused.
+    (their text is ``8``).
 
     Parameters
     ----------
     value : object
-        The count given: an ``int``, a NumPy integer or a 0D array of one.
+        The count given: an ``int``, a NumPy integer, a whole float or a 0D
+        array of one.
     name : str, default "threads"
         The argument, as the refusal names it.
 
@@ -292,19 +294,18 @@ def thread_argument(value: object, name: str = "threads") -> int:
     --------
     >>> import numpy as np
     >>> from fractions import Fraction
-    >>> thread_argument(8), thread_argument(np.array(8)), thread_argument(np.int32(2), "workers")
-    (8, 8, 2)
+    >>> thread_argument(8), thread_argument(np.array(8)), thread_argument(np.int32(2), "workers"), thread_argument(4.0)
+    (8, 8, 2, 4)
     >>> thread_argument(Fraction(8))
     Traceback (most recent call last):
     ...
     isoflow.errors.IsoflowError: threads must be a positive integer, got Fraction(8, 1)
     """
-    import numpy as np
 
-    value = scalar_given(value)
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 1:
+    whole = whole_given(value)
+    if whole is None or whole < 1:
         raise IsoflowError(f"{name} must be a positive integer, got {given_text(value)}")
-    return int(value)
+    return whole
 
 
 def check_env_threads() -> None:

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import DTypeLike
 
-from ..errors import IsoflowError, given_text
+from ..errors import IsoflowError, given_text, whole_given
 
 #: where Linux says what memory this process may use: its own files, and
 #: the control groups' (both are paths so that a test can give others)
@@ -182,11 +182,10 @@ def budget_of(max_bytes: object, where: str = "voxelize") -> int:
     """
     if max_bytes is None:
         return default_budget()
-    whole = isinstance(max_bytes, (int, np.integer)) or (
-        isinstance(max_bytes, (float, np.floating)) and float(max_bytes).is_integer())
-    if isinstance(max_bytes, (bool, np.bool_)) or not whole or max_bytes < 1:
+    whole = whole_given(max_bytes)
+    if whole is None or whole < 1:
         raise IsoflowError(f"{where}: max_bytes must be a positive whole number of bytes, got {given_text(max_bytes)}")
-    return int(max_bytes)
+    return whole
 
 
 def check_fits(need: int, what: str, hint: str = "", budget: int | None = None) -> None:

@@ -15,9 +15,11 @@ content (the suffix only breaks a tie):
   the name is the rest of the line), where no line has colour columns;
 * CSV or TSV whose header names a label column (``label``, ``index``,
   ``value``, ``labelvalue``) and a name column (``name``, ``label_name``),
-  as 3D Slicer's ``.csv`` colour tables do; its cells separated by commas,
-  tabs or semicolons (``index;name``, as a European Excel writes CSV),
-  whichever splits the header into those two columns;
+  as 3D Slicer's ``.csv`` colour tables do, or without a header, two cells
+  ``label,name`` on every row (``1,liver``); its cells separated by
+  commas, tabs or semicolons (``index;name``, ``1;liver``, as a European
+  Excel writes CSV), whichever splits the header (or the first row) so,
+  or by the one Excel's first line ``sep=;`` declares;
 * JSON: an object of label to name (``{"1": "spleen"}``, the
   ``label_names`` isoflow writes), or an nnU-Net ``dataset.json`` whose
   ``labels`` map name to label (``{"background": 0, "spleen": 1}``).
@@ -52,7 +54,8 @@ from .text_encoding import HEAD_BYTES, utf16_order
 #: what a file of label names is, for the refusal of one that is none
 EXPECTED = ("expected a FreeSurfer or 3D Slicer colour table (lines 'index name R G B A'), an ITK-SNAP label "
             "description (lines 'IDX R G B A VIS MSH \"LABEL\"'), lines 'index name', CSV or TSV with a header "
-            "naming a label column (label, index, value) and a name column (name, label_name), or JSON of label to name "
+            "naming a label column (label, index, value) and a name column (name, label_name) or rows 'label,name', "
+            "or JSON of label to name "
             "({\"1\": \"spleen\"}, or a dataset.json's \"labels\")")
 
 #: header cells that name the label column, and the name column, of a CSV or TSV (lower case)
@@ -66,6 +69,8 @@ _ITKSNAP = re.compile(r'\s*(-?[0-9]+)\s+[0-9]+\s+[0-9]+\s+[0-9]+\s+[0-9.eE+-]+\s
 _LUT = re.compile(r"\s*(-?[0-9]+)\s+(\S.*?)\s+[0-9]+\s+[0-9]+\s+[0-9]+(?:\s+[0-9]+)?\s*", re.ASCII)
 #: a line of a plain list: index name (the name the rest of the line)
 _PAIR = re.compile(r"\s*(-?[0-9]+)\s+(\S.*?)\s*", re.ASCII)
+#: Excel's first line of a CSV, "sep=;" or "sep=,": the separator of the cells below it, no row of the table
+_SEP = re.compile(r"\s*sep=(.)\s*", re.IGNORECASE)
 #: a label value in a CSV cell or a JSON key
 _INTEGER = re.compile(r"\s*(-?[0-9]+)\s*", re.ASCII)
 #: a line of numbers alone, blanks or commas between them (a point list's "0 0 0", "1.5, 2, 3")
@@ -180,15 +185,22 @@ def label_names_of(text: str, where: str, suffix: str = "") -> dict[int, str]:
     {1: 'Liver'}
     >>> label_names_of("label,name\\n2,spleen\\n1,liver\\n", "names.csv")
     {1: 'liver', 2: 'spleen'}
+    >>> label_names_of("sep=;\\n1;liver, left lobe\\n2;spleen\\n", "names.csv")
+    {1: 'liver, left lobe', 2: 'spleen'}
     """
     if text.lstrip().startswith(("{", "[")) or suffix == ".json":
         pairs = _json_pairs(text, where)
     else:
         rows = [(n, line) for n, line in enumerate(text.splitlines(), 1) if line.strip()
                 and not line.lstrip().startswith("#")]
+        declared = None
+        if rows and (sep := _SEP.fullmatch(rows[0][1])):
+            # Excel honours the line and hides it: the separator is the one it names, whatever the header
+            declared, rows = sep[1], rows[1:]
         if not rows:
-            raise IsoflowError(f"{where}: holds no label names (no line but comments); {EXPECTED}")
-        pairs = _text_pairs(rows, text, where, suffix)
+            after = f" after its 'sep={declared}'" if declared else " but comments"
+            raise IsoflowError(f"{where}: holds no label names (no line{after}); {EXPECTED}")
+        pairs = _text_pairs(rows, text, where, suffix, declared)
     found: dict[int, str] = {}
     first: dict[int, str] = {}
     for label, name, at in pairs:
@@ -204,25 +216,36 @@ def label_names_of(text: str, where: str, suffix: str = "") -> dict[int, str]:
     return dict(sorted(found.items()))
 
 
-def _text_pairs(rows: list[tuple[int, str]], text: str, where: str, suffix: str) -> list[tuple[int, str, str]]:
+def _text_pairs(rows: list[tuple[int, str]], text: str, where: str, suffix: str,
+                declared: str | None = None) -> list[tuple[int, str, str]]:
     """(label, name, where it is) of each data line of a colour table,
     an ITK-SNAP file, a plain list of lines ``index name`` or a CSV/TSV
     table; ``rows`` the lines of the file ``text`` that are neither blank
-    nor comments (number, text)."""
+    nor comments (number, text), ``declared`` the separator a first line
+    ``sep=;`` names (that line left out of ``rows``)."""
     number, head = rows[0]
     first = "\t" if suffix == ".tsv" or ("\t" in head and "," not in head) else ","
     # the header says which: a European Excel separates its cells by ";" ("index;name", "1;liver"), as its
     # list separator is; a delimiter is taken only where it splits the header into a label and a name column
-    for delimiter in dict.fromkeys((first, ",", ";", "\t")):
+    delimiters = (declared,) if declared is not None else tuple(dict.fromkeys((first, ",", ";", "\t")))
+    for delimiter in delimiters:
         cells = [c.strip().lower() for c in next(_csv_records(rows[:1], text, where, delimiter))[1]]
         name_at = next((cells.index(c) for c in NAME_COLUMNS if c in cells), None)
         label_at = next((cells.index(c) for c in LABEL_COLUMNS if c in cells and cells.index(c) != name_at), None)
         if name_at is not None and label_at is not None:
             return _table_pairs(_csv_records(rows[1:], text, where, delimiter), where, label_at, name_at)
     _refuse_numbers(rows, where)
-    if suffix in (".csv", ".tsv") and not _ITKSNAP.fullmatch(head) and not _LUT.fullmatch(head):
-        raise IsoflowError(f"{where}: line {number}: a header naming a label column ({', '.join(LABEL_COLUMNS)}) "
-                           f"and a name column ({', '.join(NAME_COLUMNS)}) is expected, not {_shown(head)}")
+    table = declared is not None or suffix in (".csv", ".tsv")
+    if not _ITKSNAP.fullmatch(head) and not _LUT.fullmatch(head) and (table or not _PAIR.fullmatch(head)):
+        # a table without a header, as a plain list is one: "1,liver" read as "1 liver" is
+        pairs = _headerless_pairs(rows, text, where, delimiters)
+        if pairs is not None:
+            return pairs
+        if table:
+            sep = f" after 'sep={declared}'" if declared is not None else ""
+            raise IsoflowError(f"{where}: line {number}: a header naming a label column ({', '.join(LABEL_COLUMNS)}) "
+                               f"and a name column ({', '.join(NAME_COLUMNS)}), or a row "
+                               f"'label{delimiters[0]}name', is expected{sep}, not {_shown(head)}")
     for pattern, kind in ((_ITKSNAP, "an ITK-SNAP line 'IDX R G B A VIS MSH \"LABEL\"'"),
                           (_LUT, "a colour table line 'index name R G B A'")):
         if pattern.fullmatch(head):
@@ -237,6 +260,32 @@ def _text_pairs(rows: list[tuple[int, str]], text: str, where: str, suffix: str)
     if _PAIR.fullmatch(head):
         return _plain_pairs(rows, where)
     raise IsoflowError(f"{where}: not a file of label names (line {number} reads {_shown(head)}); {EXPECTED}")
+
+
+def _headerless_pairs(rows: list[tuple[int, str]], text: str, where: str,
+                      delimiters: Iterable[str]) -> list[tuple[int, str, str]] | None:
+    """(label, name, where it is) of each row of a table without a header,
+    two cells ``label,name`` on every row (``1,liver``, ``1;liver``), the
+    first delimiter of ``delimiters`` that splits the first row so taken;
+    None where none does. A later row of another form is refused naming
+    its line, as a name cut at a separator (``2,liver, left``) would be a
+    wrong name, and so is a table whose names are all numbers."""
+    number, head = rows[0]
+    for delimiter in delimiters:
+        label, _, name = head.partition(delimiter)
+        if delimiter not in head or not _INTEGER.fullmatch(label) or not name.strip():
+            continue
+        pairs = []
+        for n, cells, line in _csv_records(rows, text, where, delimiter):
+            if len(cells) != 2 or not _INTEGER.fullmatch(cells[0]):
+                raise IsoflowError(f"{where}: line {n}: a row 'label{delimiter}name' of two cells is expected, as "
+                                   f"line {number} is, not {_shown(line)}")
+            pairs.append((int(cells[0]), cells[1].strip(), f"line {n}"))
+        if all(_NUMBERS.fullmatch(name) for _, name, _ in pairs):
+            raise IsoflowError(f"{where}: holds numbers, not label names (no row names a label; line {number} reads "
+                               f"{_shown(head)}); {EXPECTED}")
+        return pairs
+    return None
 
 
 def _refuse_numbers(rows: list[tuple[int, str]], where: str) -> None:

@@ -32,7 +32,9 @@ float32 rounding of them (a warning says where that moves a voxel by
 more than NIfTI's ``FLOAT32_SLACK``). It holds 3D
 and 4D volumes only, labels up to 2**31 - 1, in mm: a unit other than mm
 is not written (a warning says so; the numbers are kept, read back as
-mm), and a volume without one is read back in mm.
+mm), and a volume without one (a voxelised STL's, a bare array's) is
+read back in mm, which a warning says as it is written: the reader
+cannot tell the millimetres the file was given from those it assumed.
 """
 
 from __future__ import annotations
@@ -48,6 +50,7 @@ from .registry import (
     RawVolume,
     check_shape,
     import_library,
+    note,
     quiet_logs,
     reading,
     refuse_empty,
@@ -80,13 +83,17 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
           space: str | None = None) -> None:
     """Refuse what MGH cannot hold (a 2D object, a side of length 0; labels
     beyond int32 are refused by the format's ``max_label``); warn of a unit
-    other than mm, of voxels that float32 moves, and of a fourth axis's
-    placement, which it does not keep."""
+    other than mm, of none (read back as mm), of voxels that float32
+    moves, and of a fourth axis's placement, which it does not keep."""
     if obj.ndim not in (3, 4):
         raise IsoflowError(f"{path}: MGH holds 3D volumes (and 4D frames), this object is {obj.ndim}D; "
                            "write .nii.gz, .nrrd or .npz")
     refuse_empty(path, obj.volume.shape, "MGH")
-    if unit != "mm":
+    if unit is None:
+        # every reader (isoflow, nibabel, FreeSurfer) takes MGH's numbers as mm: a unit the volume had not
+        note(f"{path}: the volume has no length unit and MGH's is mm by definition: its voxel size and origin "
+             "are written as given and read back as mm")
+    elif unit != "mm":
         unit_not_kept(path, "MGH", unit, "millimetres only (read back as mm)")
     float32_placement(path, obj, "MGH", centred=True)
     fourth_axis_dropped(path, obj, "MGH")

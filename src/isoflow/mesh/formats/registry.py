@@ -32,7 +32,7 @@ import numpy as np
 from ...digital.frames import frame_text
 from ...digital.lattice import DigitalObject
 from ...digital.units import LENGTH_UNITS, length_unit, unit_factor
-from ...errors import IsoflowError, coordinates, given_text, number_text, warn, with_article
+from ...errors import IsoflowError, coordinates, given_text, number_text, warn, whole_given, with_article
 from ...scale.chunks import fourth_axis_name, spatial_axes, split_store
 
 #: the extra that brings every format library (pip install 'isoflow[formats]')
@@ -705,12 +705,11 @@ def check_time(time, shape, where: str) -> int:
         raise IsoflowError(f"{where}: time={given_text(time)} picks a time point of a 4D volume (x, y, z, t), this one is "
                            f"{len(shape)}D with shape {'x'.join(map(str, shape))}: it has no time points")
     count = int(shape[3])
-    if isinstance(time, np.ndarray) and time.ndim == 0:
-        time = time[()]  # NumPy's scalar, as an integer's 0D array indexes like it
-    if isinstance(time, (bool, np.bool_)) or not isinstance(time, (int, np.integer)) or not 0 <= time < count:
+    whole = whole_given(time)
+    if whole is None or not 0 <= whole < count:
         raise IsoflowError(f"{where}: time={given_text(time)} is no time point of this time series of {count} "
                            f"(0 to {count - 1})")
-    return int(time)
+    return whole
 
 
 def fourth_axis_words(path: str | os.PathLike, count: int | None = None) -> tuple[str, str]:
