@@ -50,7 +50,7 @@ import numpy as np
 
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, check_callable, check_switch, counted
-from ..scale.chunks import compute, decoded_chunk_voxels, import_dask, import_zarr
+from ..scale.chunks import compute, decoded_chunk_voxels, import_dask, import_zarr, never_written, unwritten_fill
 from ..scale.memory import check_fits, default_budget, sized
 from .engines import ArrayFlow
 
@@ -445,6 +445,9 @@ class ChunkedFlow(ArrayFlow):
             extents = extents_of(checked)
         if not len(extents[0]):
             raise IsoflowError(f"{source}: the object is empty, there is nothing to flow")
+        # chunks never written of a fill value of 1 (or of the one value of a mask) are voxels of the
+        # object: said as info of the store and the flow in memory say it, from the store's keys
+        never_written(self.where, unwritten_fill(store.array))
         lo = [int(e[0]) for e in extents]
         hi = [int(e[-1]) + 1 for e in extents]
         place = replace(place, offset=tuple(lo))
