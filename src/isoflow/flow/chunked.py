@@ -763,7 +763,7 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
     IsoflowError
         A store that is not a 3D binary volume, an empty one, slabs that do
         not fit in memory, a directory holding an earlier run's stores
-        without ``force``.
+        without ``force``, a ``directory`` that is a file.
 
     Notes
     -----
@@ -792,6 +792,8 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
     until_topology_change = check_switch(until_topology_change, "until_topology_change", "flow_chunked")
     check_callable(progress, "progress", "progress(step, state)")
     workers, width = thread_argument(workers, "workers"), thread_argument(width, "width")
+    if Path(directory).exists() and not Path(directory).is_dir():  # before the input is read and cropped into it
+        raise IsoflowError(f"{directory}: the directory for the step stores is not a directory")
     clear_earlier_run(Path(directory), check_switch(force, "force", "flow_chunked"))
     engine = ChunkedFlow(conn, directory, width=width, slab=slab, scheduler=scheduler, workers=workers)
     state = engine.start(source)
