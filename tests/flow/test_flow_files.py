@@ -821,3 +821,40 @@ def test_2d_shapes_png_ticks_pixel_coordinates_in_whole_pixels(tmp_path, monkeyp
         labels = [t.get_text().replace("\N{MINUS SIGN}", "-") for t in axis.get_xticklabels() + axis.get_yticklabels()]
         labels = [text for text in labels if text]
         assert labels and all(re.fullmatch(r"-?\d+", text) for text in labels), (axis.get_title(), labels)
+
+
+def test_2d_shapes_png_titles_clear_the_tick_labels_of_the_panels_above(tmp_path, monkeypatch):
+    """shapes.png of two rectangles, one with a hole (six panels in two
+    rows, pixel size 1): the second row's titles were drawn across the
+    first row's x tick labels (laid out by ``tight_layout``), "step 4: 25
+    pixels" crossed by "6" and "8". No
+    title now meets a tick label that another panel draws, as
+    matplotlib places them in the figure."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from isoflow.flow import pictures
+
+    drawn, save = [], pictures.save_figure
+    monkeypatch.setattr(pictures, "save_figure", lambda fig, path: drawn.append((path.name, fig)) or save(fig, path))
+    img = np.zeros((20, 20), bool)
+    img[2:10, 3:15] = True
+    img[12:18, 12:18] = True
+    img[14:16, 14:16] = False
+    np.save(tmp_path / "two.npy", img)
+    rc, _, err = run("flow", tmp_path / "two.npy", "--connectivity", "8", "--guard", "--out", tmp_path / "run")
+    assert rc == 0, err
+    fig = dict(drawn)["shapes.png"]
+    assert len(fig.axes) == 6
+    canvas = FigureCanvasAgg(fig)  # (save_figure closed it: drawn again as it was saved)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    ticks = []
+    for k, axis in enumerate(fig.axes):
+        (x0, x1), (y0, y1) = sorted(axis.get_xlim()), sorted(axis.get_ylim())
+        shown = [t for t in axis.get_xticklabels() if t.get_text() and x0 <= t.get_position()[0] <= x1]
+        shown += [t for t in axis.get_yticklabels() if t.get_text() and y0 <= t.get_position()[1] <= y1]
+        ticks += [(k, t.get_text(), t.get_window_extent(renderer)) for t in shown]
+    for k, axis in enumerate(fig.axes):
+        title = axis.title.get_window_extent(renderer)
+        crossed = [(j, text) for j, text, box in ticks if j != k and title.overlaps(box)]
+        assert not crossed, (axis.get_title(), crossed)
