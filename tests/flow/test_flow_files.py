@@ -6,6 +6,9 @@ import csv
 import io
 import json
 import re
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pymeshlab
@@ -152,6 +155,38 @@ def test_flow_out_force_never_replaces_its_own_input(tmp_path, name, extra):
     rc, stdout, err = run("flow", out / "v.npy", "--out", out, "--force", "--no-check")
     assert rc == 0, err
     assert (out / "v.npy").exists() and (out / "step_000.ply").exists()
+
+
+@pytest.mark.parametrize("name,extra", [
+    ("step_002.npy", []),  # an earlier run's step file: removed once the run is in place
+    ("step_001.zarr", ["--volumes", ".zarr"]),  # a step store, replaced by the new step 1 (flowed block by block)
+])
+def test_flow_out_force_never_replaces_its_input_through_a_link(tmp_path, name, extra):
+    """``flow LINK --out DIR --force``, LINK a symbolic link to a step file
+    of DIR: the refusal looked at the link's own directory, so the run
+    went ahead and removed (or replaced with another state) the file the
+    link names, the user's input. The link is followed now, as the shell
+    user sees the file: refused in one line, the file kept."""
+    zarr = pytest.importorskip("zarr")
+    v = np.zeros((6, 7, 8), bool)
+    v[1:5, 2:6, 2:7] = True
+    out = tmp_path / "run"
+    out.mkdir()
+    if name.endswith(".zarr"):
+        zarr.open_array(str(out / name), mode="w", shape=v.shape, chunks=(3, 7, 8), dtype="u1")[...] = v
+    else:
+        np.save(out / name, v)
+    link = tmp_path / f"link{Path(name).suffix}"
+    link.symlink_to(out / name)
+    before = {str(f.relative_to(out)): f.read_bytes() for f in sorted(out.rglob("*")) if f.is_file()}
+    p = subprocess.run([sys.executable, "-m", "isoflow", "flow", str(link), "--out", str(out), "--force", *extra],
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 2 and p.stdout == "", p.stderr
+    assert p.stderr.strip().splitlines() == [
+        f"isoflow flow: error: {link}: is the input, and flow --out {out} replaces the step files, flow.csv "
+        "and pictures there; give --out another directory (--force replaces an output, never the input)"]
+    assert {str(f.relative_to(out)): f.read_bytes() for f in sorted(out.rglob("*")) if f.is_file()} == before
+    assert np.array_equal(isoflow.read_volume(link).volume, v)
 
 
 def test_step_volumes_a_format_cannot_hold_are_refused_before_the_flow(tmp_path):

@@ -122,11 +122,26 @@ def _is_zarr_store(path: Path) -> bool:
 def replaced_by_run(directory, path) -> bool:
     """Whether a run into ``directory`` (with ``force``) replaces or removes
     the file ``path``: a step file of any suffix, flow.csv or a picture
-    there. The command refuses such a file as its input."""
+    there, named by ``path`` itself or by the file a symbolic link
+    ``path`` leads to. The command refuses such a file as its input.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> run = Path(tempfile.mkdtemp())
+    >>> (run / "step_002.npy").write_bytes(b"")
+    0
+    >>> (run.parent / f"{run.name}.npy").symlink_to(run / "step_002.npy")
+    >>> replaced_by_run(run, run / "step_002.npy"), replaced_by_run(run, run.parent / f"{run.name}.npy")
+    (True, True)
+    """
     out, path = Path(directory), Path(path)
-    if not (out.is_dir() and path.exists()) or not os.path.samefile(out, path.parent):
+    if not (out.is_dir() and path.exists()):
         return False
-    return path.name in RUN_FILES or _step_file_pattern().fullmatch(path.name) is not None
+    # the link itself (a step file's name in the directory) or the file it leads to, which the run removes
+    return any(os.path.samefile(out, named.parent) and (
+        named.name in RUN_FILES or _step_file_pattern().fullmatch(named.name) is not None)
+        for named in (path, Path(os.path.realpath(path))))
 
 
 def flow_table(result: FlowResult, checks: dict | None = None) -> tuple[list[str], list[list]]:
