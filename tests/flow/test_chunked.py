@@ -369,6 +369,23 @@ def test_command_warns_that_chunks_never_written_count_as_the_object(tmp_path):
     assert lines["blocks"] == lines["memory"], lines
 
 
+def test_force_removes_a_linked_step_store_not_the_store_it_names(tmp_path):
+    """``flow_chunked(..., force=True)`` into a directory whose
+    ``step_004.zarr`` is a symbolic link to a store of the user's raised
+    OSError ("Cannot call rmtree on a symbolic link"): the link goes as an
+    earlier run's store does, the store it names is kept."""
+    mine = tmp_path / "mine.zarr"
+    plain_store(mine, crossing_volume()[:8, :8, :8], (4, 8, 8))
+    kept = {str(f.relative_to(mine)): f.read_bytes() for f in sorted(mine.rglob("*")) if f.is_file()}
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "step_004.zarr").symlink_to(mine)
+    run = flow_chunked(mine, out, steps=1, force=True)
+    assert [s["step"] for s in run.steps] == [0, 1]
+    assert sorted(p.name for p in out.iterdir()) == ["step_000.zarr", "step_001.zarr"]
+    assert {str(f.relative_to(mine)): f.read_bytes() for f in sorted(mine.rglob("*")) if f.is_file()} == kept
+
+
 def test_command_names_a_damaged_chunk_in_one_line(tmp_path, capsys):
     """A chunk that does not decode (zarr's codec raises) ended the flow
     block by block in a traceback, exit status 1; it is one line naming the

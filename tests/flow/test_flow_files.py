@@ -189,6 +189,38 @@ def test_flow_out_force_never_replaces_its_input_through_a_link(tmp_path, name, 
     assert np.array_equal(isoflow.read_volume(link).volume, v)
 
 
+def test_flow_out_force_replaces_links_of_an_earlier_run_not_what_they_name(tmp_path):
+    """A run directory whose step files are symbolic links (to a store and
+    a file of the user's, elsewhere): ``--force`` put the new run's files
+    in place, then failed on the links ("Cannot call rmtree on a symbolic
+    link", exit 2) saying the previous run was unchanged. The links are
+    step names of the directory and go as step files do (the one the new
+    run writes is replaced by its store); what they name is kept."""
+    zarr = pytest.importorskip("zarr")
+    v = np.zeros((6, 7, 8), bool)
+    v[1:5, 2:6, 2:7] = True
+    mine = tmp_path / "mine.zarr"
+    zarr.open_array(str(mine), mode="w", shape=v.shape, chunks=(3, 7, 8), dtype="u1")[...] = v
+    np.save(tmp_path / "mine.npy", v)
+    kept = {str(f.relative_to(tmp_path)): f.read_bytes() for f in sorted(tmp_path.rglob("*")) if f.is_file()}
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "step_000.zarr").symlink_to(mine)
+    (out / "step_009.zarr").symlink_to(mine)
+    (out / "step_010.npy").symlink_to(tmp_path / "mine.npy")
+    np.save(tmp_path / "cube.npy", np.ones((3, 3, 3), bool))
+    p = subprocess.run([sys.executable, "-m", "isoflow", "flow", str(tmp_path / "cube.npy"), "--out", str(out),
+                        "--force", "--volumes", ".zarr", "-q"], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert sorted(f.name for f in out.iterdir()) == ["flow.csv", "flow.png", "shapes.png", "step_000.ply",
+                                                     "step_000.zarr", "step_001.ply", "step_001.zarr",
+                                                     "step_002.ply", "step_002.zarr"]
+    assert not (out / "step_000.zarr").is_symlink()
+    assert np.count_nonzero(zarr.open_group(str(out / "step_000.zarr"), mode="r")["0"][...]) == 27
+    assert {str(f.relative_to(tmp_path)): f.read_bytes() for f in sorted(tmp_path.rglob("*"))
+            if f.is_file() and out not in f.parents and f.name != "cube.npy"} == kept
+
+
 def test_step_volumes_a_format_cannot_hold_are_refused_before_the_flow(tmp_path):
     # binvox holds 3D voxels of one size: a 2D image or a pitch per axis
     # was refused when step 0 was written, after the input was read and

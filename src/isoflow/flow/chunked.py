@@ -716,8 +716,8 @@ def clear_earlier_run(directory: Path, force: bool) -> None:
         raise IsoflowError(f"{directory}: holds the stores of an earlier run ({earlier[0].name}"
                            f"{f' and {len(earlier) - 1} more' if len(earlier) > 1 else ''}); give an empty directory, "
                            "or force=True to replace them")
-    for store in earlier:
-        shutil.rmtree(store)
+    for store in earlier:  # a link named as a step store goes as the store would; what it names is the user's
+        store.unlink() if store.is_symlink() else shutil.rmtree(store)
 
 
 def flow_chunked(source, directory, steps: int | None = None, connectivity: int = 6, *, max_steps: int | None = None,

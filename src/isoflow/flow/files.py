@@ -531,13 +531,16 @@ class FlowWriter:
             interrupted_by_signal()
         try:
             for name in self.staged:
-                if (self.out / name).is_dir():  # a zarr step volume: a directory is not replaced by a rename
+                if (self.out / name).is_symlink():  # a step store's name that is a link: a rename cannot take it
+                    (self.out / name).unlink()
+                elif (self.out / name).is_dir():  # a zarr step volume: a directory is not replaced by a rename
                     shutil.rmtree(self.out / name)
                 os.replace(self.stage / name, self.out / name)
             sync_directory(self.out)
             for old in _run_names(self.out):
-                if old.name not in new and old.exists():
-                    shutil.rmtree(old) if old.is_dir() else old.unlink()
+                if old.name not in new and (old.exists() or old.is_symlink()):
+                    # a step name that is a link goes as the step file it stands for; what it names is the user's
+                    shutil.rmtree(old) if old.is_dir() and not old.is_symlink() else old.unlink()
         except OSError as exc:
             raise write_error(self.out, exc, existed=True) from None
         finally:
