@@ -100,6 +100,20 @@ def test_a_pipe_or_device_as_the_output_is_refused_and_kept(tmp_path, command):
     assert stat.S_ISFIFO(os.lstat(out).st_mode)  # still the pipe
 
 
+def test_a_pipe_as_the_flow_directory_asks_for_a_directory(tmp_path):
+    """``flow --out PIPE`` was refused with "give a file name", where
+    --out names the directory of the run's files: the line asks for a
+    directory, and the pipe is kept."""
+    np.save(tmp_path / "cube.npy", np.ones((3, 3, 3), bool))
+    out = tmp_path / "pipe"
+    os.mkfifo(out)
+    p = run("flow", tmp_path / "cube.npy", "--out", out, "-q")
+    assert p.returncode == 2, p.stderr
+    assert p.stderr == f"isoflow flow: error: {out}: is a device, pipe or socket, not a directory; give a directory\n", \
+        p.stderr
+    assert stat.S_ISFIFO(os.lstat(out).st_mode)
+
+
 def files_under(directory: Path) -> dict[str, bytes]:
     """Every file under ``directory`` with its bytes."""
     return {str(f.relative_to(directory)): f.read_bytes() for f in sorted(directory.rglob("*")) if f.is_file()}

@@ -1680,6 +1680,21 @@ def test_flow_chunked_refuses_a_worker_count_that_is_no_integer_before_writing(t
     assert not (tmp_path / "out").exists()
 
 
+def test_flow_chunked_refuses_a_directory_that_is_a_file(tmp_path):
+    """``directory`` is where the step stores go: a file there ended the
+    run in NotADirectoryError from ``mkdir`` (after the input was read and
+    checked), not one IsoflowError naming it; the file is left as it was."""
+    zarr = pytest.importorskip("zarr")
+    from isoflow.flow.chunked import flow_chunked
+
+    zarr.open_array(str(tmp_path / "in.zarr"), mode="w", shape=(3, 3, 3), chunks=(2, 2, 2), dtype="u1")[...] = 1
+    (tmp_path / "out").write_bytes(b"mine")
+    with pytest.raises(IsoflowError) as info:
+        flow_chunked(tmp_path / "in.zarr", tmp_path / "out")
+    assert str(info.value) == f"{tmp_path / 'out'}: the directory for the step stores is not a directory"
+    assert (tmp_path / "out").read_bytes() == b"mine"
+
+
 @pytest.mark.parametrize("voxelize", [
     lambda **k: isoflow.voxelize_mesh(_box(), **k),
     lambda **k: isoflow.voxelize_meshes([_box()], **k),

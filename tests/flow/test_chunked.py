@@ -346,6 +346,46 @@ def test_command_names_the_fill_value_of_chunks_never_written(tmp_path):
     assert not (tmp_path / "run").exists()
 
 
+def test_command_warns_that_chunks_never_written_count_as_the_object(tmp_path):
+    """A store of fill value 1 whose chunks were never written reads them
+    as voxels of the object: ``info`` of the store and the flow in memory
+    said so in one warning line, the flow block by block (``--volumes
+    .zarr``) said nothing and flowed them as written voxels. Its run is
+    the run of the array zarr reads, and the warning is the same line."""
+    store = tmp_path / "sparse.zarr"
+    z = zarr.create_array(str(store), shape=(10, 10, 10), chunks=(4, 4, 4), dtype="u1", fill_value=1)
+    z[:4, :4, :4] = 0  # one chunk of 27 written
+    read = np.asarray(zarr.open_array(str(store), mode="r")[...]) != 0
+    assert np.count_nonzero(read) == 1000 - 64
+    lines = {}
+    for name, extra in (("memory", []), ("blocks", ["--out", str(tmp_path / "run"), "--volumes", ".zarr"])):
+        run = subprocess.run([sys.executable, "-m", "isoflow", "flow", str(store), "--json", *extra],
+                             capture_output=True, text=True, timeout=300)
+        assert run.returncode == 0, run.stderr
+        assert [s["voxels"] for s in json.loads(run.stdout)["steps"]][0] == np.count_nonzero(read)
+        # (where numba's cache is cold a process may say so first, in a note line)
+        lines[name] = [line for line in run.stderr.splitlines() if "warning:" in line]
+    assert len(lines["memory"]) == 1 and "26 of 27 chunks were never written" in lines["memory"][0], lines
+    assert lines["blocks"] == lines["memory"], lines
+
+
+def test_force_removes_a_linked_step_store_not_the_store_it_names(tmp_path):
+    """``flow_chunked(..., force=True)`` into a directory whose
+    ``step_004.zarr`` is a symbolic link to a store of the user's raised
+    OSError ("Cannot call rmtree on a symbolic link"): the link goes as an
+    earlier run's store does, the store it names is kept."""
+    mine = tmp_path / "mine.zarr"
+    plain_store(mine, crossing_volume()[:8, :8, :8], (4, 8, 8))
+    kept = {str(f.relative_to(mine)): f.read_bytes() for f in sorted(mine.rglob("*")) if f.is_file()}
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "step_004.zarr").symlink_to(mine)
+    run = flow_chunked(mine, out, steps=1, force=True)
+    assert [s["step"] for s in run.steps] == [0, 1]
+    assert sorted(p.name for p in out.iterdir()) == ["step_000.zarr", "step_001.zarr"]
+    assert {str(f.relative_to(mine)): f.read_bytes() for f in sorted(mine.rglob("*")) if f.is_file()} == kept
+
+
 def test_command_names_a_damaged_chunk_in_one_line(tmp_path, capsys):
     """A chunk that does not decode (zarr's codec raises) ended the flow
     block by block in a traceback, exit status 1; it is one line naming the

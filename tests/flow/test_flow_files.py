@@ -6,6 +6,9 @@ import csv
 import io
 import json
 import re
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pymeshlab
@@ -152,6 +155,70 @@ def test_flow_out_force_never_replaces_its_own_input(tmp_path, name, extra):
     rc, stdout, err = run("flow", out / "v.npy", "--out", out, "--force", "--no-check")
     assert rc == 0, err
     assert (out / "v.npy").exists() and (out / "step_000.ply").exists()
+
+
+@pytest.mark.parametrize("name,extra", [
+    ("step_002.npy", []),  # an earlier run's step file: removed once the run is in place
+    ("step_001.zarr", ["--volumes", ".zarr"]),  # a step store, replaced by the new step 1 (flowed block by block)
+])
+def test_flow_out_force_never_replaces_its_input_through_a_link(tmp_path, name, extra):
+    """``flow LINK --out DIR --force``, LINK a symbolic link to a step file
+    of DIR: the refusal looked at the link's own directory, so the run
+    went ahead and removed (or replaced with another state) the file the
+    link names, the user's input. The link is followed now, as the shell
+    user sees the file: refused in one line, the file kept."""
+    zarr = pytest.importorskip("zarr")
+    v = np.zeros((6, 7, 8), bool)
+    v[1:5, 2:6, 2:7] = True
+    out = tmp_path / "run"
+    out.mkdir()
+    if name.endswith(".zarr"):
+        zarr.open_array(str(out / name), mode="w", shape=v.shape, chunks=(3, 7, 8), dtype="u1")[...] = v
+    else:
+        np.save(out / name, v)
+    link = tmp_path / f"link{Path(name).suffix}"
+    link.symlink_to(out / name)
+    before = {str(f.relative_to(out)): f.read_bytes() for f in sorted(out.rglob("*")) if f.is_file()}
+    p = subprocess.run([sys.executable, "-m", "isoflow", "flow", str(link), "--out", str(out), "--force", *extra],
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 2 and p.stdout == "", p.stderr
+    assert p.stderr.strip().splitlines() == [
+        f"isoflow flow: error: {link}: is the input, and flow --out {out} replaces the step files, flow.csv "
+        "and pictures there; give --out another directory (--force replaces an output, never the input)"]
+    assert {str(f.relative_to(out)): f.read_bytes() for f in sorted(out.rglob("*")) if f.is_file()} == before
+    assert np.array_equal(isoflow.read_volume(link).volume, v)
+
+
+def test_flow_out_force_replaces_links_of_an_earlier_run_not_what_they_name(tmp_path):
+    """A run directory whose step files are symbolic links (to a store and
+    a file of the user's, elsewhere): ``--force`` put the new run's files
+    in place, then failed on the links ("Cannot call rmtree on a symbolic
+    link", exit 2) saying the previous run was unchanged. The links are
+    step names of the directory and go as step files do (the one the new
+    run writes is replaced by its store); what they name is kept."""
+    zarr = pytest.importorskip("zarr")
+    v = np.zeros((6, 7, 8), bool)
+    v[1:5, 2:6, 2:7] = True
+    mine = tmp_path / "mine.zarr"
+    zarr.open_array(str(mine), mode="w", shape=v.shape, chunks=(3, 7, 8), dtype="u1")[...] = v
+    np.save(tmp_path / "mine.npy", v)
+    kept = {str(f.relative_to(tmp_path)): f.read_bytes() for f in sorted(tmp_path.rglob("*")) if f.is_file()}
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "step_000.zarr").symlink_to(mine)
+    (out / "step_009.zarr").symlink_to(mine)
+    (out / "step_010.npy").symlink_to(tmp_path / "mine.npy")
+    np.save(tmp_path / "cube.npy", np.ones((3, 3, 3), bool))
+    p = subprocess.run([sys.executable, "-m", "isoflow", "flow", str(tmp_path / "cube.npy"), "--out", str(out),
+                        "--force", "--volumes", ".zarr", "-q"], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert sorted(f.name for f in out.iterdir()) == ["flow.csv", "flow.png", "shapes.png", "step_000.ply",
+                                                     "step_000.zarr", "step_001.ply", "step_001.zarr",
+                                                     "step_002.ply", "step_002.zarr"]
+    assert not (out / "step_000.zarr").is_symlink()
+    assert np.count_nonzero(zarr.open_group(str(out / "step_000.zarr"), mode="r")["0"][...]) == 27
+    assert {str(f.relative_to(tmp_path)): f.read_bytes() for f in sorted(tmp_path.rglob("*"))
+            if f.is_file() and out not in f.parents and f.name != "cube.npy"} == kept
 
 
 def test_step_volumes_a_format_cannot_hold_are_refused_before_the_flow(tmp_path):
@@ -821,3 +888,40 @@ def test_2d_shapes_png_ticks_pixel_coordinates_in_whole_pixels(tmp_path, monkeyp
         labels = [t.get_text().replace("\N{MINUS SIGN}", "-") for t in axis.get_xticklabels() + axis.get_yticklabels()]
         labels = [text for text in labels if text]
         assert labels and all(re.fullmatch(r"-?\d+", text) for text in labels), (axis.get_title(), labels)
+
+
+def test_2d_shapes_png_titles_clear_the_tick_labels_of_the_panels_above(tmp_path, monkeypatch):
+    """shapes.png of two rectangles, one with a hole (six panels in two
+    rows, pixel size 1): the second row's titles were drawn across the
+    first row's x tick labels (laid out by ``tight_layout``), "step 4: 25
+    pixels" crossed by "6" and "8". No
+    title now meets a tick label that another panel draws, as
+    matplotlib places them in the figure."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from isoflow.flow import pictures
+
+    drawn, save = [], pictures.save_figure
+    monkeypatch.setattr(pictures, "save_figure", lambda fig, path: drawn.append((path.name, fig)) or save(fig, path))
+    img = np.zeros((20, 20), bool)
+    img[2:10, 3:15] = True
+    img[12:18, 12:18] = True
+    img[14:16, 14:16] = False
+    np.save(tmp_path / "two.npy", img)
+    rc, _, err = run("flow", tmp_path / "two.npy", "--connectivity", "8", "--guard", "--out", tmp_path / "run")
+    assert rc == 0, err
+    fig = dict(drawn)["shapes.png"]
+    assert len(fig.axes) == 6
+    canvas = FigureCanvasAgg(fig)  # (save_figure closed it: drawn again as it was saved)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    ticks = []
+    for k, axis in enumerate(fig.axes):
+        (x0, x1), (y0, y1) = sorted(axis.get_xlim()), sorted(axis.get_ylim())
+        shown = [t for t in axis.get_xticklabels() if t.get_text() and x0 <= t.get_position()[0] <= x1]
+        shown += [t for t in axis.get_yticklabels() if t.get_text() and y0 <= t.get_position()[1] <= y1]
+        ticks += [(k, t.get_text(), t.get_window_extent(renderer)) for t in shown]
+    for k, axis in enumerate(fig.axes):
+        title = axis.title.get_window_extent(renderer)
+        crossed = [(j, text) for j, text, box in ticks if j != k and title.overlaps(box)]
+        assert not crossed, (axis.get_title(), crossed)

@@ -421,11 +421,12 @@ def refuse_output_over_input(args: argparse.Namespace) -> None:
     meshes_given = meshes if isinstance(meshes, list) else [meshes]
     inputs = [getattr(args, "input", None)] + meshes_given
     # (flow's --out too: a directory, which may be the input zarr store itself)
-    for out in (getattr(args, key, None) for key in ("output", "csv", "png", "out")):
+    for key in ("output", "csv", "png", "out"):
+        out = getattr(args, key, None)
         if not out or out == "-":
             continue
         out_file, out_set = split_dataset(out)
-        refuse_unusable_output(out_file)  # before exists() below raises on it
+        refuse_unusable_output(out_file, directory=key == "out")  # before exists() below raises on it
         for name in filter(None, inputs):
             in_file, in_set = split_dataset(name)
             # os.path's tests: an input that cannot be looked at is not the output, and its reader says why

@@ -50,7 +50,7 @@ import numpy as np
 
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, check_callable, check_switch, counted
-from ..scale.chunks import compute, decoded_chunk_voxels, import_dask, import_zarr
+from ..scale.chunks import compute, decoded_chunk_voxels, import_dask, import_zarr, never_written, unwritten_fill
 from ..scale.memory import check_fits, default_budget, sized
 from .engines import ArrayFlow
 
@@ -445,6 +445,9 @@ class ChunkedFlow(ArrayFlow):
             extents = extents_of(checked)
         if not len(extents[0]):
             raise IsoflowError(f"{source}: the object is empty, there is nothing to flow")
+        # chunks never written of a fill value of 1 (or of the one value of a mask) are voxels of the
+        # object: said as info of the store and the flow in memory say it, from the store's keys
+        never_written(self.where, unwritten_fill(store.array))
         lo = [int(e[0]) for e in extents]
         hi = [int(e[-1]) + 1 for e in extents]
         place = replace(place, offset=tuple(lo))
@@ -713,8 +716,8 @@ def clear_earlier_run(directory: Path, force: bool) -> None:
         raise IsoflowError(f"{directory}: holds the stores of an earlier run ({earlier[0].name}"
                            f"{f' and {len(earlier) - 1} more' if len(earlier) > 1 else ''}); give an empty directory, "
                            "or force=True to replace them")
-    for store in earlier:
-        shutil.rmtree(store)
+    for store in earlier:  # a link named as a step store goes as the store would; what it names is the user's
+        store.unlink() if store.is_symlink() else shutil.rmtree(store)
 
 
 def flow_chunked(source, directory, steps: int | None = None, connectivity: int = 6, *, max_steps: int | None = None,
@@ -760,7 +763,7 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
     IsoflowError
         A store that is not a 3D binary volume, an empty one, slabs that do
         not fit in memory, a directory holding an earlier run's stores
-        without ``force``.
+        without ``force``, a ``directory`` that is a file.
 
     Notes
     -----
@@ -789,6 +792,8 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
     until_topology_change = check_switch(until_topology_change, "until_topology_change", "flow_chunked")
     check_callable(progress, "progress", "progress(step, state)")
     workers, width = thread_argument(workers, "workers"), thread_argument(width, "width")
+    if Path(directory).exists() and not Path(directory).is_dir():  # before the input is read and cropped into it
+        raise IsoflowError(f"{directory}: the directory for the step stores is not a directory")
     clear_earlier_run(Path(directory), check_switch(force, "force", "flow_chunked"))
     engine = ChunkedFlow(conn, directory, width=width, slab=slab, scheduler=scheduler, workers=workers)
     state = engine.start(source)

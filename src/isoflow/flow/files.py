@@ -122,11 +122,26 @@ def _is_zarr_store(path: Path) -> bool:
 def replaced_by_run(directory, path) -> bool:
     """Whether a run into ``directory`` (with ``force``) replaces or removes
     the file ``path``: a step file of any suffix, flow.csv or a picture
-    there. The command refuses such a file as its input."""
+    there, named by ``path`` itself or by the file a symbolic link
+    ``path`` leads to. The command refuses such a file as its input.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> run = Path(tempfile.mkdtemp())
+    >>> (run / "step_002.npy").write_bytes(b"")
+    0
+    >>> (run.parent / f"{run.name}.npy").symlink_to(run / "step_002.npy")
+    >>> replaced_by_run(run, run / "step_002.npy"), replaced_by_run(run, run.parent / f"{run.name}.npy")
+    (True, True)
+    """
     out, path = Path(directory), Path(path)
-    if not (out.is_dir() and path.exists()) or not os.path.samefile(out, path.parent):
+    if not (out.is_dir() and path.exists()):
         return False
-    return path.name in RUN_FILES or _step_file_pattern().fullmatch(path.name) is not None
+    # the link itself (a step file's name in the directory) or the file it leads to, which the run removes
+    return any(os.path.samefile(out, named.parent) and (
+        named.name in RUN_FILES or _step_file_pattern().fullmatch(named.name) is not None)
+        for named in (path, Path(os.path.realpath(path))))
 
 
 def flow_table(result: FlowResult, checks: dict | None = None) -> tuple[list[str], list[list]]:
@@ -516,13 +531,16 @@ class FlowWriter:
             interrupted_by_signal()
         try:
             for name in self.staged:
-                if (self.out / name).is_dir():  # a zarr step volume: a directory is not replaced by a rename
+                if (self.out / name).is_symlink():  # a step store's name that is a link: a rename cannot take it
+                    (self.out / name).unlink()
+                elif (self.out / name).is_dir():  # a zarr step volume: a directory is not replaced by a rename
                     shutil.rmtree(self.out / name)
                 os.replace(self.stage / name, self.out / name)
             sync_directory(self.out)
             for old in _run_names(self.out):
-                if old.name not in new and old.exists():
-                    shutil.rmtree(old) if old.is_dir() else old.unlink()
+                if old.name not in new and (old.exists() or old.is_symlink()):
+                    # a step name that is a link goes as the step file it stands for; what it names is the user's
+                    shutil.rmtree(old) if old.is_dir() and not old.is_symlink() else old.unlink()
         except OSError as exc:
             raise write_error(self.out, exc, existed=True) from None
         finally:

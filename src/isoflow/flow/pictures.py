@@ -52,7 +52,9 @@ def _render_planar_shapes(plt, frames, box, path: Path) -> Path:
 
     cols = min(3, len(frames))
     rows = -(-len(frames) // cols)
-    fig = plt.figure(figsize=(3.2 * cols, 3.2 * rows), dpi=100)
+    # constrained layout spaces the rows for the titles and tick labels of panels of equal aspect as they
+    # are drawn; tight_layout left a row's titles across the x tick labels of the row above
+    fig = plt.figure(figsize=(3.2 * cols, 3.2 * rows), dpi=100, layout="constrained")
     pad = frames[0][0].spacing
     for k, (state, rec) in enumerate(frames):
         ax = fig.add_subplot(rows, cols, k + 1)
@@ -66,7 +68,6 @@ def _render_planar_shapes(plt, frames, box, path: Path) -> Path:
         ax.tick_params(labelsize=6)
         ax.set_title(f"step {rec['step']}: {counted(rec['voxels'], 'pixel')}, betti {tuple(rec['betti'])}", fontsize=8)
     fig.suptitle("digital curvature flow", fontsize=9)
-    fig.tight_layout()
     return save_figure(fig, path)
 
 

@@ -142,7 +142,7 @@ def file_suffix(name: str, others: Iterable[str] = ()) -> str | None:
                key=len, default=None)
 
 
-def refuse_unusable_output(path: str | os.PathLike) -> None:
+def refuse_unusable_output(path: str | os.PathLike, directory: bool = False) -> None:
     """Refuse, in one line and before any work, an output whose name the
     file system cannot take (longer than its limit, 255 bytes on most) or
     that is a device, a pipe or a socket (or a link to one: ``/dev/stdout``).
@@ -151,6 +151,9 @@ def refuse_unusable_output(path: str | os.PathLike) -> None:
     ----------
     path : str or os.PathLike
         The output.
+    directory : bool
+        ``path`` names a directory for the outputs (``flow --out DIR``):
+        the line asks for one, not for a file name.
 
     Raises
     ------
@@ -170,9 +173,14 @@ def refuse_unusable_output(path: str | os.PathLike) -> None:
             raise IsoflowError(f"{path}: cannot be an output ({exc.strerror})") from None
         return  # missing, or a dangling link: a new file is made
     if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+        if directory:
+            raise IsoflowError(f"{path}: is a device, pipe or socket, not a directory; give a directory")
         raise IsoflowError(f"{path}: is a device, pipe or socket, not a file; an output is written beside it and "
                            "renamed over it, which would replace it: give a file name")
     if names_open_file(path):
+        if directory:
+            raise IsoflowError(f"{path}: names an open file of this process (standard output, a descriptor), "
+                               "not a directory; give a directory")
         # standard output redirected to a file is a regular file at the end
         # of the link: renamed over, /dev/stdout (run as root) became a file
         raise IsoflowError(f"{path}: names an open file of this process (standard output, a descriptor), not a "
