@@ -400,6 +400,37 @@ def test_an_object_answers_for_the_volume_it_was_given_after_the_caller_changes_
     assert obj.volume.flags.writeable is False
 
 
+def test_an_object_answers_for_the_volume_it_was_given_after_the_owner_of_a_read_only_view_changes_it():
+    """A read-only view of an array that its owner keeps writing (what a
+    library hands out: ``a.view()`` made read-only, ``np.broadcast_to``,
+    ``as_strided(..., writeable=False)``) was held as it was, not copied:
+    the owner's writes changed the object's voxels, its flow and its
+    report. The object, and a flow's first state, answer for the volume as
+    it was given, as scikit-image and SciPy count it; a read-only array
+    that owns its memory is still held without a copy."""
+    from scipy import ndimage
+    from skimage.measure import euler_number
+
+    rng = np.random.default_rng(6)
+    owner = rng.random((9, 9, 9)) < 0.4
+    given = owner.copy()
+    views = [owner.view(), np.broadcast_to(owner, owner.shape),
+             np.lib.stride_tricks.as_strided(owner, writeable=False), owner[:, :, ::-1][:, :, ::-1]]
+    for view in views:
+        view.flags.writeable = False
+    objects = [isoflow.DigitalObject(view) for view in views]
+    flows = [isoflow.run_flow(view, max_steps=1) for view in views]
+    owner[...] = ~owner  # the owner reuses its array
+    for obj, flow in zip(objects, flows):
+        assert obj.voxels == np.count_nonzero(given) == flow.states[0].voxels
+        assert isoflow.analyze(obj).euler_characteristic == euler_number(given, connectivity=1)  # 6-connectivity
+        assert isoflow.betti_numbers(obj.volume, 6)[0] == ndimage.label(given)[1]
+        assert np.array_equal(flow.states[0].volume, given)
+    kept = np.ones((3, 3, 3), bool)
+    kept.flags.writeable = False
+    assert np.shares_memory(isoflow.DigitalObject(kept).volume, kept)
+
+
 def test_results_and_objects_hold_read_only_arrays_when_made_and_when_unpickled():
     """A result and a digital object are frozen, but the arrays they held
     were writeable when made and again after ``pickle.loads`` (NumPy

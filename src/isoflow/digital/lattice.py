@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError, counted, given_text, number_text
-from ..results import read_only, same_fields
+from ..results import read_only, same_fields, writeable_under
 from ..scale.arrays import as_array, binary, is_masked_array
 from .frames import space_given
 from .units import unit_given
@@ -55,7 +55,10 @@ class DigitalObject:
     ----------
     volume : array_like of bool or 0/1
         Held read-only: a writeable array of the caller's is copied, so
-        that changing it afterwards leaves the object as it was.
+        that changing it afterwards leaves the object as it was, and so is
+        a read-only view of memory that something else can write (a
+        writeable array's ``view()`` made read-only, ``np.broadcast_to``
+        of it); a read-only array that owns its memory is held as it is.
     offset : tuple of int, optional
         Lattice index of voxel ``(0, ..., 0)`` (default zeros).
     parity : {0, 1}
@@ -485,11 +488,12 @@ class DigitalObject:
 
 def _held(vol: np.ndarray, given: Any) -> np.ndarray:
     """The volume an object keeps, read-only: a copy where ``vol`` is the
-    caller's writeable array or a view of memory someone else holds (which
-    they could change under the object, and its answers with it); ``vol``
-    itself where :func:`binary` made it anew (a conversion from 0/1
-    integers) or it is read-only already (a file's, handed over)."""
-    if vol.flags.writeable and (vol is given or vol.base is not None):
+    caller's writeable array or a view of memory someone else could write
+    (under the object, and its answers with it), a read-only view of a
+    writeable array included; ``vol`` itself where :func:`binary` made it
+    anew (a conversion from 0/1 integers) or nothing can write its memory
+    (a file's, handed over: :func:`~isoflow.results.handed_over`)."""
+    if (vol.flags.writeable and (vol is given or vol.base is not None)) or writeable_under(vol):
         vol = vol.copy()
     return read_only(vol)
 

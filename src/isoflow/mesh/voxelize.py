@@ -47,6 +47,7 @@ from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, MeshNote, check_callable, check_path, check_switch, counted, given_text, voxeliser_of, warn
+from ..results import handed_over
 from ..scale import memory
 from .fills import (
     NO_AREA,
@@ -1056,7 +1057,8 @@ def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, 
     result = voxelize(vertices, faces, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
                       write_bytes=write_bytes, progress=progress, details=True)
     assert result.volume is not None  # voxelize keeps the voxels in memory unless given a store
-    obj = DigitalObject(result.volume, pitch=result.pitch, origin=result.origin)
+    # the voxeliser's array, which nothing writes again: held as it is, not copied
+    obj = DigitalObject(handed_over(result.volume), pitch=result.pitch, origin=result.origin)
     if details:
         return obj, result
     say_note(result.note)
