@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from ..errors import IsoflowError, given_text
+from ..errors import IsoflowError, given_text, scalar_given
 from .fills import Fill
 
 #: a slab (and so a zarr chunk's first side) holds at most this many voxels
@@ -62,7 +62,9 @@ def check_chunks(chunks: object) -> tuple[int, int, int]:
     ...
     isoflow.errors.IsoflowError: chunks must be three positive integers, got (0, 3, 3)
     """
-    sides = list(chunks) if isinstance(chunks, (tuple, list, np.ndarray)) else []
+    # a side given as a 0D array of a number is that number; a 0D array of chunks is one number, not three
+    listed = isinstance(chunks, (tuple, list)) or (isinstance(chunks, np.ndarray) and chunks.ndim == 1)
+    sides = [scalar_given(c) for c in chunks] if listed else []
     # each side a whole number >= 1 (a NumPy integer too): 2.5 is no side, and "4" no number
     if len(sides) != 3 or not all(isinstance(c, (int, float, np.integer, np.floating)) and not isinstance(c, (bool, np.bool_))
                                   and math.isfinite(c) and c == int(c) and c >= 1 for c in sides):

@@ -46,7 +46,18 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, MeshNote, check_callable, check_path, check_switch, counted, given_text, voxeliser_of, warn
+from ..errors import (
+    IsoflowError,
+    MeshNote,
+    check_callable,
+    check_path,
+    check_switch,
+    counted,
+    given_text,
+    scalar_given,
+    voxeliser_of,
+    warn,
+)
 from ..results import handed_over
 from ..scale import memory
 from .fills import (
@@ -928,6 +939,7 @@ def check_write_bytes(write_bytes: object) -> float:
     ...
     isoflow.errors.IsoflowError: voxelize: write_bytes must be a number of bytes per voxel from 0 on, got -1
     """
+    write_bytes = scalar_given(write_bytes)  # a 0D array of a number is that number
     ok = isinstance(write_bytes, (int, float, np.integer, np.floating)) and not isinstance(write_bytes, (bool, np.bool_))
     if not ok or not 0 <= float(write_bytes) < float("inf"):  # type: ignore[arg-type]
         raise IsoflowError(f"voxelize: write_bytes must be a number of bytes per voxel from 0 on, got {given_text(write_bytes)}")

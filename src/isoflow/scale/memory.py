@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import DTypeLike
 
-from ..errors import IsoflowError, given_text
+from ..errors import IsoflowError, given_text, scalar_given
 
 #: where Linux says what memory this process may use: its own files, and
 #: the control groups' (both are paths so that a test can give others)
@@ -182,6 +182,7 @@ def budget_of(max_bytes: object, where: str = "voxelize") -> int:
     """
     if max_bytes is None:
         return default_budget()
+    max_bytes = scalar_given(max_bytes)  # a 0D array of a number is that number
     whole = isinstance(max_bytes, (int, np.integer)) or (
         isinstance(max_bytes, (float, np.floating)) and float(max_bytes).is_integer())
     if isinstance(max_bytes, (bool, np.bool_)) or not whole or max_bytes < 1:
