@@ -570,6 +570,10 @@ def placement_lost(obj: DigitalObject, unit: str | None = None, space: str | Non
         [frame_text(space)] if space is not None else [])
 
 
+#: where a refusal of a 4D object by a format of 2D and 3D images sends it: the formats that write 4D
+HOLD_4D = "write .nii.gz, .nrrd, .h5 or .npz, which hold 4D"
+
+
 def refuse_empty(path: Path, shape: tuple[int, ...], fmt: str) -> None:
     """Refuse, before writing, an array with a side of length 0 (the last
     state of a flow that vanished, a crop of nothing), which ``fmt`` has no
