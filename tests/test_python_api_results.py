@@ -431,6 +431,40 @@ def test_an_object_answers_for_the_volume_it_was_given_after_the_owner_of_a_read
     assert np.shares_memory(isoflow.DigitalObject(kept).volume, kept)
 
 
+class _Image:
+    """An image class that hands ``np.asarray`` its own array, as an
+    xarray DataArray of a NumPy array does."""
+
+    def __init__(self, array):
+        self.array = array
+
+    def __array__(self, dtype=None, copy=None):
+        return self.array if dtype is None else self.array.astype(dtype)
+
+
+def test_an_object_given_an_image_that_holds_its_array_leaves_that_array_writeable_and_as_it_was():
+    """``DigitalObject(image)`` of an object whose ``__array__`` gives its
+    own bool array held that array uncopied and made it read-only: the
+    caller's next write to its own array raised "assignment destination is
+    read-only" (and write_volume, write_surface, run_flow, flow_step and
+    to_manifold of such an image did the same). The caller's array stays
+    writeable, and the object answers for the volume as it was given, as
+    scikit-image counts it."""
+    from skimage.measure import euler_number
+
+    rng = np.random.default_rng(7)
+    array = rng.random((8, 8, 8)) < 0.4
+    given = array.copy()
+    obj = isoflow.DigitalObject(_Image(array))
+    flow = isoflow.run_flow(_Image(array), max_steps=1)
+    isoflow.to_manifold(_Image(array), 26)
+    assert array.flags.writeable
+    array[...] = ~array  # the caller's own array, written as before
+    assert obj.voxels == np.count_nonzero(given) == flow.states[0].voxels
+    assert isoflow.analyze(obj).euler_characteristic == euler_number(given, connectivity=1)
+    assert np.array_equal(flow.states[0].volume, given)
+
+
 def test_results_and_objects_hold_read_only_arrays_when_made_and_when_unpickled():
     """A result and a digital object are frozen, but the arrays they held
     were writeable when made and again after ``pickle.loads`` (NumPy
