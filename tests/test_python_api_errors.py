@@ -1601,6 +1601,67 @@ def test_0d_integer_arrays_for_counts_and_sizes(tmp_path):
             call()
 
 
+def test_0d_arrays_for_a_label_a_byte_budget_a_time_limit_and_block_and_chunk_sides(tmp_path):
+    """A label, ``max_bytes``, ``time_limit`` and the sides of
+    ``block_shape`` and ``chunks`` refused a 0D array of a number, each in
+    a line that contradicts itself ("label must be a number, got 2",
+    "chunks must be three positive integers, got (4, 4, 4)"), and a 0D
+    array given for all of ``chunks`` raised NumPy's "iteration over a 0-d
+    array". Each is the number it holds: the voxels NumPy counts of the
+    label, the genus trimesh gives of a box, the report of the array in
+    memory, the chunks zarr reads back; a 0D bool is refused as the bool
+    is, and a 0D array of chunks in one line."""
+    trimesh = pytest.importorskip("trimesh")
+    dask_array = pytest.importorskip("dask.array")
+    zarr = pytest.importorskip("zarr")
+    labels = np.zeros((5, 5, 5), np.int32)
+    labels[1:4, 1:4, 1:4], labels[2, 2, 2] = 2, 3
+    path = isoflow.write_labels(labels, tmp_path / "seg.npz")
+    assert isoflow.read_volume(path, label=np.array(2)).voxels == np.count_nonzero(labels == 2) == 26
+    assert isoflow.read_object(path, label=np.array(3.0)).voxels == np.count_nonzero(labels == 3) == 1
+    with pytest.raises(IsoflowError, match="label must be a number, not True or False, got True"):
+        isoflow.read_volume(path, label=np.array(True))
+    box = trimesh.creation.box((2, 2, 2))
+    assert box.euler_number == 2  # genus 0
+    verdict = isoflow.verify_genus(box, [8], time_limit=np.array(60.0))
+    assert verdict.agree and verdict.reference == 0
+    assert isoflow.voxelize_meshes([box], resolution=4, max_bytes=np.array(10**9)).voxels == (4 ** 3,)
+    cube = np.pad(np.ones((3, 3, 3), bool), 1)
+    chunked = isoflow.analyze_chunked(dask_array.from_array(cube, chunks=2), 6, block_shape=(np.array(2),) * 3)
+    assert chunked == isoflow.analyze(cube, 6) and chunked.betti == [1, 0, 0]
+    isoflow.voxelize_to_zarr(box, tmp_path / "box.zarr", resolution=8, chunks=(np.array(4),) * 3)
+    assert zarr.open(str(tmp_path / "box.zarr"), mode="r")["0"].chunks == (4, 4, 4)  # OME-Zarr level 0
+    with pytest.raises(IsoflowError, match=r"^voxelize_to_zarr: chunks must be three positive integers, got 4$"):
+        isoflow.voxelize_to_zarr(box, tmp_path / "other.zarr", resolution=8, chunks=np.array(4))
+
+
+def test_0d_arrays_for_switches_a_write_rate_and_label_names(tmp_path):
+    """A 0D array of a bool given for a switch (``surfaces``, ``guard``,
+    ``strict``, ``ascii``, ``force``) was refused as "must be True or
+    False, got True", one of a number for ``write_bytes`` as "must be a
+    number of bytes per voxel from 0 on, got 0", and a name held in a 0D
+    array (an element of an array of names) as "the name of label 1 is
+    'x', not a string of one line". Each is what it holds: a cube's report
+    without surfaces, the file written and read back by trimesh, the
+    column of names; a 0D array of a word given for a switch is still
+    refused naming it."""
+    trimesh = pytest.importorskip("trimesh")
+    cube = np.pad(np.ones((2, 2, 2), bool), 1)
+    assert "surfaces" not in isoflow.analyze(cube, 6, surfaces=np.array(False))
+    assert isoflow.run_flow(cube, guard=np.array(True)).guard is True
+    box = trimesh.creation.box((2, 2, 2))
+    assert isoflow.voxelize_mesh(box, resolution=4, strict=np.array(False), write_bytes=np.array(0)).voxels == 4 ** 3
+    path = isoflow.write_surface(cube, tmp_path / "cube.ply", 6, ascii=np.array(True))
+    path = isoflow.write_surface(cube, path, 6, ascii=np.array(True), force=np.array(True))
+    assert path.read_bytes().startswith(b"ply\nformat ascii")
+    assert trimesh.load(path, process=False).area == 24.0  # a 2x2x2 cube of unit voxels
+    labels = cube.astype(np.uint8)
+    assert isoflow.label_table(labels, names=np.array(["bone"]))["name"].tolist() == ["bone"]
+    assert isoflow.label_table(labels, names=[np.array("bone")])["name"].tolist() == ["bone"]
+    with pytest.raises(IsoflowError, match=r"^analyze: surfaces must be True or False, got 'no'$"):
+        isoflow.analyze(cube, 6, surfaces=np.array("no"))
+
+
 @pytest.mark.parametrize("suffix", [".nrrd", ".zarr", ".npz", ".h5"])
 def test_a_label_image_given_for_its_names_says_where_they_are(suffix, tmp_path):
     """read_label_names of a label image that records its names (a 3D

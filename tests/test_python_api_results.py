@@ -400,6 +400,71 @@ def test_an_object_answers_for_the_volume_it_was_given_after_the_caller_changes_
     assert obj.volume.flags.writeable is False
 
 
+def test_an_object_answers_for_the_volume_it_was_given_after_the_owner_of_a_read_only_view_changes_it():
+    """A read-only view of an array that its owner keeps writing (what a
+    library hands out: ``a.view()`` made read-only, ``np.broadcast_to``,
+    ``as_strided(..., writeable=False)``) was held as it was, not copied:
+    the owner's writes changed the object's voxels, its flow and its
+    report. The object, and a flow's first state, answer for the volume as
+    it was given, as scikit-image and SciPy count it; a read-only array
+    that owns its memory is still held without a copy."""
+    from scipy import ndimage
+    from skimage.measure import euler_number
+
+    rng = np.random.default_rng(6)
+    owner = rng.random((9, 9, 9)) < 0.4
+    given = owner.copy()
+    views = [owner.view(), np.broadcast_to(owner, owner.shape),
+             np.lib.stride_tricks.as_strided(owner, writeable=False), owner[:, :, ::-1][:, :, ::-1]]
+    for view in views:
+        view.flags.writeable = False
+    objects = [isoflow.DigitalObject(view) for view in views]
+    flows = [isoflow.run_flow(view, max_steps=1) for view in views]
+    owner[...] = ~owner  # the owner reuses its array
+    for obj, flow in zip(objects, flows):
+        assert obj.voxels == np.count_nonzero(given) == flow.states[0].voxels
+        assert isoflow.analyze(obj).euler_characteristic == euler_number(given, connectivity=1)  # 6-connectivity
+        assert isoflow.betti_numbers(obj.volume, 6)[0] == ndimage.label(given)[1]
+        assert np.array_equal(flow.states[0].volume, given)
+    kept = np.ones((3, 3, 3), bool)
+    kept.flags.writeable = False
+    assert np.shares_memory(isoflow.DigitalObject(kept).volume, kept)
+
+
+class _Image:
+    """An image class that hands ``np.asarray`` its own array, as an
+    xarray DataArray of a NumPy array does."""
+
+    def __init__(self, array):
+        self.array = array
+
+    def __array__(self, dtype=None, copy=None):
+        return self.array if dtype is None else self.array.astype(dtype)
+
+
+def test_an_object_given_an_image_that_holds_its_array_leaves_that_array_writeable_and_as_it_was():
+    """``DigitalObject(image)`` of an object whose ``__array__`` gives its
+    own bool array held that array uncopied and made it read-only: the
+    caller's next write to its own array raised "assignment destination is
+    read-only" (and write_volume, write_surface, run_flow, flow_step and
+    to_manifold of such an image did the same). The caller's array stays
+    writeable, and the object answers for the volume as it was given, as
+    scikit-image counts it."""
+    from skimage.measure import euler_number
+
+    rng = np.random.default_rng(7)
+    array = rng.random((8, 8, 8)) < 0.4
+    given = array.copy()
+    obj = isoflow.DigitalObject(_Image(array))
+    flow = isoflow.run_flow(_Image(array), max_steps=1)
+    isoflow.to_manifold(_Image(array), 26)
+    assert array.flags.writeable
+    array[...] = ~array  # the caller's own array, written as before
+    assert obj.voxels == np.count_nonzero(given) == flow.states[0].voxels
+    assert isoflow.analyze(obj).euler_characteristic == euler_number(given, connectivity=1)
+    assert np.array_equal(flow.states[0].volume, given)
+
+
 def test_results_and_objects_hold_read_only_arrays_when_made_and_when_unpickled():
     """A result and a digital object are frozen, but the arrays they held
     were writeable when made and again after ``pickle.loads`` (NumPy

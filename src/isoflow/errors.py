@@ -862,6 +862,7 @@ def check_switch(value: object, name: str, where: str) -> bool:
     """
     import numpy as np
 
+    value = scalar_given(value)  # a 0D array of a bool is that bool
     if not isinstance(value, (bool, np.bool_)):
         raise IsoflowError(f"{where}: {name} must be True or False, got {given_text(value)}")
     return bool(value)

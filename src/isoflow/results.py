@@ -82,6 +82,76 @@ def read_only(a: np.ndarray) -> np.ndarray:
     return a
 
 
+def writeable_under(a: np.ndarray) -> bool:
+    """Whether the memory that ``a`` views can still be written through
+    something else: an array it views, however deep, that is writeable,
+    or a writeable buffer under them (a ``bytearray``, an ``mmap`` opened
+    for writing). A read-only view of such memory changes when its owner
+    writes.
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        A view, or an array that owns its memory.
+
+    Returns
+    -------
+    bool
+        False where ``a`` owns its memory, or every array and buffer under
+        it is read-only (a file mapped for reading, ``bytes``).
+
+    Examples
+    --------
+    >>> owner = np.zeros(3)
+    >>> writeable_under(read_only(owner.view())), writeable_under(read_only(np.zeros(3)))
+    (True, False)
+    """
+    base: Any = a.base
+    while base is not None:
+        if isinstance(base, np.ndarray):
+            if base.flags.writeable:
+                return True
+        else:
+            try:
+                with memoryview(base) as buffer:
+                    if not buffer.readonly:
+                        return True
+            except (TypeError, ValueError):  # no buffer (as_strided's holder of the array), or a closed mmap
+                pass
+        base = getattr(base, "base", None)
+    return False
+
+
+def handed_over(a: np.ndarray) -> np.ndarray:
+    """``a`` made read-only in place with every array it views, and
+    returned: a volume that its maker gives to a holder that copies memory
+    others could still write (a :class:`~isoflow.digital.lattice.DigitalObject`)
+    and keeps no writeable handle on, so that it is held without a copy.
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        The array; the arrays it views are the maker's own.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``a``, now read-only, as the arrays under it are.
+
+    Examples
+    --------
+    >>> owner = np.zeros((2, 3))
+    >>> view = handed_over(owner.T)
+    >>> view.flags.writeable, owner.flags.writeable, writeable_under(view)
+    (False, False, False)
+    """
+    base: Any = a
+    while isinstance(base, np.ndarray):
+        base.flags.writeable = False
+        base = base.base
+    return a
+
+
 def read_only_fields(obj: Any) -> None:
     """Make the array fields of the dataclass instance ``obj`` read-only,
     each as a read-only view where it is writeable, so that an array the

@@ -992,3 +992,37 @@ def test_voxelize_to_binvox_names_the_grid_a_reader_finds(tmp_path, capsys, exte
     else:
         assert f"in a {grid} grid (written as {'x'.join(map(str, dims))}: binvox holds a cube" in line, line
     assert f"{np.prod(extents)} voxels" in line
+
+
+@pytest.mark.parametrize("suffix", [".png", ".tif", ".zarr"])
+def test_a_4d_object_refused_by_a_format_of_images_is_sent_where_4d_is_written(tmp_path, suffix):
+    """A 4D object written as PNG was sent to ".tif, .nii.gz, .nrrd, .h5 or
+    .npz, which hold 3D" (a TIFF refuses it in turn), and TIFF and OME-Zarr
+    refused it naming nowhere. Each names the formats that hold 4D, and
+    each of those holds it: nibabel, pynrrd, h5py and NumPy read the
+    same (x, y, z, t) array back."""
+    nibabel = pytest.importorskip("nibabel")
+    nrrd = pytest.importorskip("nrrd")
+    h5py = pytest.importorskip("h5py")
+    if suffix != ".png":
+        pytest.importorskip({".tif": "tifffile", ".zarr": "zarr"}[suffix])
+    series = np.random.default_rng(4).random((4, 3, 5, 2)) < 0.5
+    with pytest.raises(IsoflowError) as caught:
+        isoflow.write_volume(series, tmp_path / f"series{suffix}")
+    message = str(caught.value)
+    assert "\n" not in message and message.endswith("this object is 4D; write .nii.gz, .nrrd, .h5 or .npz, which hold 4D")
+    named = re.findall(r"\.(?:nii\.gz|nrrd|h5|npz)\b", message.split("; write ")[1])
+    assert named == [".nii.gz", ".nrrd", ".h5", ".npz"]
+    for name in named:
+        path = isoflow.write_volume(series, tmp_path / f"series{name}")
+        if name == ".nii.gz":
+            back = np.asarray(nibabel.load(path).dataobj)
+        elif name == ".nrrd":
+            back = nrrd.read(str(path))[0]
+        elif name == ".h5":
+            with h5py.File(path, "r") as f:
+                back = next(f[k][()] for k in f if isinstance(f[k], h5py.Dataset))
+        else:
+            with np.load(path) as archive:
+                back = next(archive[k] for k in archive.files if archive[k].ndim == 4)
+        assert back.shape == series.shape and np.array_equal(back != 0, series), name

@@ -208,7 +208,10 @@ def label_names(names: Mapping[int, str] | Sequence[str] | None, where: str) -> 
                            f"the i-th), not {given_text(names)}{read}")
     pairs = names.items() if isinstance(names, Mapping) else enumerate(list(names), 1)
     found: dict[int, str] = {}
-    for label, name in pairs:
+    for given_label, given_name in pairs:
+        # 0D arrays (of an array of names) as what they hold
+        label: Any = scalar_given(given_label)
+        name: Any = scalar_given(given_name)
         whole = whole_given(label)
         if whole is None or whole == 0:
             raise IsoflowError(f"{where}: a label name is given for {given_text(label)}, and labels are named "

@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError, counted, given_text, number_text, whole_given
-from ..results import read_only, same_fields
+from ..results import read_only, same_fields, writeable_under
 from ..scale.arrays import as_array, binary, is_masked_array
 from .frames import space_given
 from .units import unit_given
@@ -54,8 +54,13 @@ class DigitalObject:
     Parameters
     ----------
     volume : array_like of bool or 0/1
-        Held read-only: a writeable array of the caller's is copied, so
-        that changing it afterwards leaves the object as it was.
+        Held read-only: a writeable array of the caller's is copied (the
+        one an object given in its place hands ``np.asarray`` too, an
+        xarray DataArray's), so that changing it afterwards leaves the
+        object as it was and the caller's array writeable, and so is
+        a read-only view of memory that something else can write (a
+        writeable array's ``view()`` made read-only, ``np.broadcast_to``
+        of it); a read-only array that owns its memory is held as it is.
     offset : tuple of int, optional
         Lattice index of voxel ``(0, ..., 0)`` (default zeros).
     parity : {0, 1}
@@ -486,11 +491,17 @@ class DigitalObject:
 
 def _held(vol: np.ndarray, given: Any) -> np.ndarray:
     """The volume an object keeps, read-only: a copy where ``vol`` is the
-    caller's writeable array or a view of memory someone else holds (which
-    they could change under the object, and its answers with it); ``vol``
-    itself where :func:`binary` made it anew (a conversion from 0/1
-    integers) or it is read-only already (a file's, handed over)."""
-    if vol.flags.writeable and (vol is given or vol.base is not None):
+    caller's writeable array (or the one an object given in its place
+    holds) or a view of memory someone else could write (under the
+    object, and its answers with it), a read-only view of a writeable
+    array included; ``vol`` itself where :func:`binary` made it anew (a
+    conversion from 0/1 integers, or from nested lists) or nothing can
+    write its memory (a file's, handed over:
+    :func:`~isoflow.results.handed_over`)."""
+    # np.asarray of an object that is no array or sequence (one with __array__, as an xarray DataArray
+    # has, or a memoryview) may give that object's own memory, which read_only would have frozen too
+    theirs = vol is given or vol.base is not None or not isinstance(given, (np.ndarray, list, tuple))
+    if (vol.flags.writeable and theirs) or writeable_under(vol):
         vol = vol.copy()
     return read_only(vol)
 

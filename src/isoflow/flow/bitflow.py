@@ -24,7 +24,7 @@ import numpy as np
 from ..digital.analysis import report_from_histogram
 from ..digital.closed_surfaces import census_of_rows
 from ..digital.lattice import DigitalObject
-from ..results import read_only
+from ..results import handed_over
 from ..scale import bitrows, flowbits
 from .motion import motion_luts
 from .planar import planar_motion_luts
@@ -133,7 +133,7 @@ class PackedObject:
     def to_object(self) -> DigitalObject:
         """The state as a :class:`DigitalObject` (the volume unpacked)."""
         volume = flowbits.unpack(self.bits, _layers(self.shape)).reshape(self.shape)
-        return replace(self.place, volume=read_only(volume))  # handed over: no copy
+        return replace(self.place, volume=handed_over(volume))  # unpacked for it alone: no copy
 
     def bbox_list(self) -> list | None:
         """World min corner then max corner, one flat list (as

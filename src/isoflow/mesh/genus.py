@@ -967,6 +967,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] | None
     # for the default connectivity and the voxel-contact reference
     written = written_connectivity(mesh) if isinstance(mesh, (str, os.PathLike)) else None
     connectivity, recorded = _connectivity_of(connectivity, written)
+    time_limit = scalar_given(time_limit)  # type: ignore[assignment]  # a 0D array of a number is that number
     if isinstance(time_limit, (bool, np.bool_)) or not isinstance(time_limit, (int, float, np.integer, np.floating)) \
             or not time_limit > 0:
         raise IsoflowError(f"time_limit must be a positive number of seconds, got {given_text(time_limit)}")

@@ -60,9 +60,10 @@ def check_chunks(chunks: object) -> tuple[int, int, int]:
     ...
     isoflow.errors.IsoflowError: chunks must be three positive integers, got (0, 3, 3)
     """
-    sides = list(chunks) if isinstance(chunks, (tuple, list, np.ndarray)) else []
-    # each side a whole number >= 1 (a NumPy integer too): 2.5 is no side, and "4" no number
-    wholes = [whole_given(c) for c in sides]
+    # a side given as a 0D array of a number is that number; a 0D array of chunks is one number, not three
+    listed = isinstance(chunks, (tuple, list)) or (isinstance(chunks, np.ndarray) and chunks.ndim == 1)
+    # each side a whole number >= 1 (a NumPy integer, a 0D array of one): 2.5 is no side, and "4" no number
+    wholes = [whole_given(c) for c in chunks] if listed else []
     if len(wholes) != 3 or any(c is None or c < 1 for c in wholes):
         raise IsoflowError(f"chunks must be three positive integers, got {given_text(chunks)}")
     return wholes[0], wholes[1], wholes[2]  # type: ignore[return-value]  # ints, as just checked

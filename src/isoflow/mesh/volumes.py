@@ -23,7 +23,7 @@ from ..digital.label_table import LabelImage, as_labels, label_names
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..digital.units import LENGTH_UNITS, length_unit, unit_given
 from ..errors import IsoflowError, check_path, check_switch, choice_of, counted, given_text, missing, number_text, warn
-from ..results import read_only
+from ..results import handed_over
 from ..scale.arrays import NotBinary, as_array, binary, fill_value_named, refuse_object
 from ..scale.chunks import never_written
 from ..scale.memory import check_fits
@@ -388,8 +388,8 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
                             # read_volume_with_unit gives it as the file says it
                             "unit": raw.unit if raw.unit in LENGTH_UNITS else None, "space": raw.space}
     try:  # DigitalObject checks the metadata fields; its errors get the file's name
-        # handed over read-only: an object copies a volume someone else could still write
-        return DigitalObject(read_only(vol), **{k: v for k, v in meta.items() if v is not None})
+        # handed over read-only with the file's array under it: an object copies a volume someone else could still write
+        return DigitalObject(handed_over(vol), **{k: v for k, v in meta.items() if v is not None})
     except IsoflowError as exc:
         raise exc.at(where) from None
 

@@ -46,7 +46,19 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, MeshNote, check_callable, check_path, check_switch, counted, given_text, voxeliser_of, warn
+from ..errors import (
+    IsoflowError,
+    MeshNote,
+    check_callable,
+    check_path,
+    check_switch,
+    counted,
+    given_text,
+    scalar_given,
+    voxeliser_of,
+    warn,
+)
+from ..results import handed_over
 from ..scale import memory
 from .fills import (
     NO_AREA,
@@ -927,6 +939,7 @@ def check_write_bytes(write_bytes: object) -> float:
     ...
     isoflow.errors.IsoflowError: voxelize: write_bytes must be a number of bytes per voxel from 0 on, got -1
     """
+    write_bytes = scalar_given(write_bytes)  # a 0D array of a number is that number
     ok = isinstance(write_bytes, (int, float, np.integer, np.floating)) and not isinstance(write_bytes, (bool, np.bool_))
     if not ok or not 0 <= float(write_bytes) < float("inf"):  # type: ignore[arg-type]
         raise IsoflowError(f"voxelize: write_bytes must be a number of bytes per voxel from 0 on, got {given_text(write_bytes)}")
@@ -1056,7 +1069,8 @@ def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, 
     result = voxelize(vertices, faces, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
                       write_bytes=write_bytes, progress=progress, details=True)
     assert result.volume is not None  # voxelize keeps the voxels in memory unless given a store
-    obj = DigitalObject(result.volume, pitch=result.pitch, origin=result.origin)
+    # the voxeliser's array, which nothing writes again: held as it is, not copied
+    obj = DigitalObject(handed_over(result.volume), pitch=result.pitch, origin=result.origin)
     if details:
         return obj, result
     say_note(result.note)

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import IsoflowError, given_text, missing, warn
+from ..errors import IsoflowError, given_text, missing, scalar_given, warn
 
 #: zarr chunks smaller than this (voxels) are grouped into larger blocks when
 #: the grid would otherwise have more than MAX_BLOCKS blocks: per-task
@@ -359,10 +359,11 @@ def checked_block_shape(block_shape, shape) -> tuple[int, ...]:
     (2, 3)
     """
     try:
-        block = tuple(int(b) for b in block_shape)
+        given = [scalar_given(c) for c in block_shape]  # a 0D array of a number is that number
+        block = tuple(int(c) for c in given)
         # numbers only: int() and float() read "2" and True as 2 and 1 too
         whole = all(isinstance(c, (int, float, np.integer, np.floating)) and not isinstance(c, (bool, np.bool_))
-                    and b == float(c) for b, c in zip(block, block_shape))
+                    and b == float(c) for b, c in zip(block, given))
     except (TypeError, ValueError, OverflowError):
         block, whole = (), False
     if not whole or len(block) != len(shape) or any(b < 1 for b in block):

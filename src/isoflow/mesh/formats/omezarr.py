@@ -52,6 +52,7 @@ from ...errors import IsoflowError, check_path, counted, warn
 from ...scale.arrays import NotBinary
 from ...scale.chunks import axis_names, never_written, open_zarr_node, spatial_axes, split_store, unwritten_fill
 from .registry import (
+    HOLD_4D,
     UDUNITS,
     RawVolume,
     axis_units,
@@ -810,7 +811,7 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
     if dataset is not None:
         raise IsoflowError(f"{path}:{dataset}: a level is named to read an OME-Zarr image; write to {path}")
     if obj.ndim not in (2, 3):
-        raise IsoflowError(f"{path}: OME-Zarr images here are 2D or 3D, this object is {obj.ndim}D")
+        raise IsoflowError(f"{path}: OME-Zarr images here are 2D or 3D, this object is {obj.ndim}D; {HOLD_4D}")
     if unit is not None and unit not in UDUNITS:
         unit_not_kept(path, "OME-Zarr", unit, "the UDUNITS length units of NGFF only")
     space_not_kept(path, "OME-Zarr", space)

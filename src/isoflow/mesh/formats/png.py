@@ -34,6 +34,7 @@ import numpy as np
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .registry import (
+    HOLD_4D,
     LabelVolume,
     RawVolume,
     check_alpha,
@@ -115,8 +116,9 @@ def check(path: Path, obj: DigitalObject | LabelVolume, dataset: str | None = No
 .h5 or .npz, which hold 3D
     """
     if obj.ndim != 2:
-        raise IsoflowError(f"{path}: a PNG holds a 2D image, this object is {obj.ndim}D; write .tif, .nii.gz, "
-                           ".nrrd, .h5 or .npz, which hold 3D")
+        # a TIFF holds no 4D object: it is named for a 3D one only
+        elsewhere = HOLD_4D if obj.ndim == 4 else "write .tif, .nii.gz, .nrrd, .h5 or .npz, which hold 3D"
+        raise IsoflowError(f"{path}: a PNG holds a 2D image, this object is {obj.ndim}D; {elsewhere}")
     refuse_empty(path, obj.volume.shape, "PNG")
     lost = placement_lost(obj, unit, space)  # said where what is read back differs
     if lost:

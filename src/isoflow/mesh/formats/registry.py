@@ -32,7 +32,7 @@ import numpy as np
 from ...digital.frames import frame_text
 from ...digital.lattice import DigitalObject
 from ...digital.units import LENGTH_UNITS, length_unit, unit_factor
-from ...errors import IsoflowError, coordinates, given_text, number_text, warn, whole_given, with_article
+from ...errors import IsoflowError, coordinates, given_text, number_text, scalar_given, warn, whole_given, with_article
 from ...scale.chunks import fourth_axis_name, spatial_axes, split_store
 
 #: the extra that brings every format library (pip install 'isoflow[formats]')
@@ -570,6 +570,10 @@ def placement_lost(obj: DigitalObject, unit: str | None = None, space: str | Non
         [frame_text(space)] if space is not None else [])
 
 
+#: where a refusal of a 4D object by a format of 2D and 3D images sends it: the formats that write 4D
+HOLD_4D = "write .nii.gz, .nrrd, .h5 or .npz, which hold 4D"
+
+
 def refuse_empty(path: Path, shape: tuple[int, ...], fmt: str) -> None:
     """Refuse, before writing, an array with a side of length 0 (the last
     state of a flow that vanished, a crop of nothing), which ``fmt`` has no
@@ -794,6 +798,7 @@ def check_label(label, dtype, where: str) -> int | float:
     number a float array cannot hold is refused, as no voxel can have it."""
     if np.dtype(dtype).kind not in "biuf":
         raise IsoflowError(f"{where}: array of type {dtype} holds no labels")
+    label = scalar_given(label)  # a 0D array of a number (np.load of a saved label) is that number
     if not np.isscalar(label) or isinstance(label, (str, bytes)):
         raise IsoflowError(f"{where}: label must be a number, got {given_text(label)}")
     if isinstance(label, (bool, np.bool_)):  # True equals 1: it would pick label 1 unasked

@@ -102,6 +102,7 @@ import numpy as np
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .registry import (
+    HOLD_4D,
     RawVolume,
     ascii_unit,
     check_alpha,
@@ -820,7 +821,7 @@ def _check_resolution(path: Path, obj: DigitalObject) -> None:
 def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None,
           space: str | None = None) -> None:
     if obj.ndim not in (2, 3):
-        raise IsoflowError(f"{path}: a TIFF holds a 2D image or a 3D stack, this object is {obj.ndim}D")
+        raise IsoflowError(f"{path}: a TIFF holds a 2D image or a 3D stack, this object is {obj.ndim}D; {HOLD_4D}")
     refuse_empty(path, obj.volume.shape, "TIFF")  # tifffile fails on it with a ValueError of its own
     space_not_kept(path, "TIFF", space)
     if not is_ome_name(path.name):  # OME-XML writes the sizes as decimals, not as TIFF rationals
