@@ -356,6 +356,36 @@ def test_double_sided_shells_with_their_own_corners_give_the_drawn_solid():
     assert r.double_sided_faces == len(torus.faces) and "double-sided" in r.note
 
 
+@pytest.mark.parametrize(("shape", "doubled"), [("box", "one side"), ("sphere", "a fifth"), ("sphere", "half"),
+                                              ("box", "one side, reversed first")])
+def test_a_closed_model_with_some_faces_drawn_double_sided_is_its_solid(tmp_path, shape, doubled):
+    """Some faces of a closed model also written reversed (one side of a
+    box, a share of a sphere's faces) are double-sided faces, not walls
+    between solids: the command gives the model's solid, by trimesh's
+    ``contains`` at the voxel centres. Both faces of each pair were
+    dropped as a wall (their free edges are the model's edges), which left
+    a hole: a box lost 408 of its 8,000 voxels, the half-doubled sphere
+    more than half of its own."""
+    rng = np.random.default_rng(0)
+    model = trimesh.creation.box((1, 1, 1)) if shape == "box" else trimesh.creation.icosphere(2, 1.0)
+    if shape == "box":
+        which = np.arange(len(model.faces)) < 2
+    else:
+        which = rng.random(len(model.faces)) < {"a fifth": 0.2, "half": 0.5}[doubled]
+    copies = model.faces[which][:, ::-1]
+    faces = np.concatenate([copies, model.faces] if "reversed first" in doubled else [model.faces, copies])
+    path, out = tmp_path / "model.ply", tmp_path / "model.npz"
+    trimesh.Trimesh(model.vertices, faces, process=False).export(path)
+    r = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(path), "--resolution", "20", "-o", str(out)],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert f"{int(which.sum())} double-sided faces" in r.stderr and "walls" not in r.stderr
+    d = np.load(out)
+    idx = np.indices(d["volume"].shape).reshape(3, -1).T + d["offset"]
+    inside = model.contains(d["origin"] + d["pitch"] * (idx + 0.5))
+    assert np.array_equal(d["volume"].reshape(-1), inside)
+
+
 def test_walls_between_solids_cancel():
     """Boxes stacked face to face with their shared faces coincident (a
     voxel-art export) give their union, not membranes read as faces."""

@@ -245,6 +245,11 @@ def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray, mate: np.ndarray 
     dropped whole, both faces of each pair, leaving the union that the
     winding number gave anyway (one face of each pair would leave
     membranes inside it, and call the union double-sided).
+    Pairs whose every free edge the unpaired faces use an odd number of
+    times (once, on a manifold surface) are no wall but a patch of a
+    surface drawn double-sided (a box with one side written both ways):
+    the unpaired faces leave a hole there that one face of each pair
+    closes, where a wall's edges are used by the solids on both sides.
     A pair of zero-area faces (three corners on a line) draws nothing and
     is left as it is.
 
@@ -283,42 +288,74 @@ def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray, mate: np.ndarray 
     if not paired.any():
         return f, 0
     first = paired & (np.arange(len(f)) < mate)
-    wall = _walls(f[first], f[~paired & ~flat], n_vertices)
-    if not wall.all():
-        wall |= _inside_walls(p[first], p[~paired & ~flat], edge_table(f[first], n_vertices)[5], ~wall)
+    wall, patch, root = _walls(f[first], f[~paired & ~flat], n_vertices)
+    if not (wall | patch).all():
+        wall |= _inside_walls(p[first], p[~paired & ~flat], root, ~wall & ~patch)
     drop = paired.copy()
     kept = np.nonzero(first)[0][~wall]
     drop[kept] = False
     return f[~drop], int(len(kept))
 
 
-def _walls(kept: np.ndarray, single: np.ndarray, n_vertices: int) -> np.ndarray:
-    """Which of the ``kept`` faces (one per pair) lie in a wall: a component
-    of them with free edges (used once among them), every one of which an
-    unpaired face also uses; or a closed component (no free edge) every
-    corner of which an unpaired face also uses: the walls all round a solid
-    enclosed by others (the middle cube of a cross of cubes written one by
-    one, whose corners the arms' faces reach, not the diagonals inside its
-    faces), where a closed model drawn double-sided meets no unpaired face,
-    or a few of its corners."""
+def _walls(kept: np.ndarray, single: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Which of the ``kept`` faces (one per pair) lie in a wall, which in a
+    patch of a surface drawn double-sided, and each one's component.
+
+    The components are the kept faces joined across edges that no unpaired
+    face uses: on an edge of the unpaired faces a wall meets the solids'
+    faces, and there it may meet pairs of the other kind too (an outer face
+    of a cube written both ways, beside the wall to the next cube), which
+    are told apart on their own.  A wall is a component with free edges
+    (used once among its faces), every one of which an unpaired face also
+    uses, not all of them an odd number of times; or a closed component (no
+    free edge) every corner of which an unpaired face also uses: the walls
+    all round a solid enclosed by others, where a closed model drawn
+    double-sided meets no unpaired face, or a few of its corners.  A patch
+    is a component whose every free edge the unpaired faces use an odd
+    number of times: they have a hole there, which one face of each pair
+    closes (some faces of a closed model written both ways), where a wall's
+    free edges are used by the solids on both of its sides, an even number
+    of times."""
+    from ..scale.graphs import components
+
+    m = len(kept)
     if len(single) == 0:
-        return np.zeros(len(kept), dtype=bool)
+        return np.zeros(m, dtype=bool), np.zeros(m, dtype=bool), edge_table(kept, n_vertices)[5]
     n = np.int64(max(n_vertices, 1))
-    lo, hi, fwd, bwd, first, root = edge_table(kept, n_vertices)
-    slo, shi, _, _, _, _ = edge_table(single, n_vertices)
-    free = (fwd + bwd) == 1
-    covered = np.isin(lo[free] * n + hi[free], slo * n + shi)
-    comp = root[first[free]]
-    has_free = np.zeros(len(kept), dtype=bool)
+    slo, shi, sfwd, sbwd, _, _ = edge_table(single, n_vertices)
+    order = np.argsort(slo * n + shi)
+    skey, suses = (slo * n + shi)[order], (sfwd + sbwd)[order]
+    a, b = kept.ravel(), np.roll(kept, -1, axis=1).ravel()
+    face = np.repeat(np.arange(m), 3)
+    real = a != b
+    a, b, face = a[real], b[real], face[real]
+    key = np.minimum(a, b) * n + np.maximum(a, b)
+    at = np.minimum(np.searchsorted(skey, key), len(skey) - 1)
+    covered = skey[at] == key
+    odd = covered & (suses[at] % 2 == 1)
+    o = np.argsort(key, kind="stable")
+    join = (key[o][1:] == key[o][:-1]) & ~covered[o][1:]
+    _, label = components(m, face[o][:-1][join], face[o][1:][join])
+    root = np.unique(label, return_index=True)[1][label]  # each face's component: its smallest face
+    # each component's free edges: those its own faces use once
+    o = np.lexsort((root[face], key))
+    k, c = key[o], root[face][o]
+    begin = np.flatnonzero(np.r_[True, (k[1:] != k[:-1]) | (c[1:] != c[:-1])])
+    free = begin[np.diff(np.r_[begin, len(k)]) == 1]
+    comp = c[free]
+    has_free = np.zeros(m, dtype=bool)
     has_free[comp] = True
-    open_edge = np.zeros(len(kept), dtype=bool)
-    open_edge[comp[~covered]] = True
+    open_edge = np.zeros(m, dtype=bool)
+    open_edge[comp[~covered[o][free]]] = True
+    even_edge = np.zeros(m, dtype=bool)
+    even_edge[comp[~odd[o][free]]] = True
     # a corner no unpaired face uses, per component of the kept faces
     reached = np.zeros(int(n_vertices), dtype=bool)
     reached[single.ravel()] = True
-    bare = np.zeros(len(kept), dtype=bool)
+    bare = np.zeros(m, dtype=bool)
     bare[np.repeat(root, 3)[~reached[kept.ravel()]]] = True
-    return ((has_free & ~open_edge) | (~has_free & ~bare))[root]
+    patch = has_free & ~even_edge
+    return ((has_free & ~open_edge & ~patch) | (~has_free & ~bare))[root], patch[root], root
 
 
 #: the most (point, triangle) solid angles that :func:`_inside_walls`
