@@ -941,7 +941,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] | None
     check_callable(progress, "progress", "progress(done, total)")
     check_callable(on_resolution, "on_resolution", "on_resolution(entry)")
     strict = check_strict(strict, "verify_genus")
-    fill = check_fill(fill)  # before any resolution runs: the verdict compares by it as a string
+    fill = check_fill(fill, "verify_genus")  # before any resolution runs: the verdict compares by it as a string
     # a 0D array is iterable by its type and not by NumPy, which raised TypeError from list()
     if resolutions is None:  # (a cap checked below; one that is not an int keeps the defaults for its refusal)
         cap = whole_given(max_resolution)
