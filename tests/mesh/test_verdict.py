@@ -733,3 +733,31 @@ def test_an_empty_grid_is_not_said_to_merge_bodies(tmp_path):
     r = _genus_json(tmp_path, "torus.ply", "--resolution", 1, "--no-step")
     assert r["kind"] == "no_solid" and r["digital"][-1]["betti"][0] == 0
     assert "body_count" not in [n["kind"] for n in r["notes"]] and "merge" not in r["verdict"]
+
+
+def test_strict_says_the_edges_balance_only_once_faces_are_turned(tmp_path):
+    """genus --strict refuses a torus with 100 faces turned over (closed,
+    its edges inconsistently oriented) and says what genus does without
+    --strict. The line said "585 inconsistently oriented edges (... its
+    edges balance, so it bounds a solid ...)": of the edges it had just
+    counted as inconsistent. They balance once the 100 faces are turned
+    back, as trimesh's fix_normals turns them."""
+    import subprocess
+    import sys
+
+    import trimesh
+
+    torus = trimesh.creation.torus(1, 0.3)
+    faces = torus.faces.copy()
+    faces[:100] = faces[:100, ::-1]
+    trimesh.Trimesh(torus.vertices, faces, process=False).export(tmp_path / "turned.ply")
+    fixed = trimesh.Trimesh(torus.vertices, faces, process=False)
+    fixed.fix_normals()
+    turned = int(np.count_nonzero(np.any(fixed.faces != faces, axis=1)))
+    assert turned in (100, len(faces) - 100)  # fix_normals may turn the others instead: the same surface
+    done = subprocess.run([sys.executable, "-m", "isoflow", "genus", "turned.ply", "--strict", "--resolution", "16"],
+                          capture_output=True, text=True, cwd=tmp_path)
+    assert done.returncode == 2 and done.stdout == "" and len(done.stderr.splitlines()) == 1, done.stderr
+    assert "inconsistently oriented edges" in done.stderr
+    assert "its edges balance once 100 faces are turned over to agree with their neighbours, so it bounds a solid" \
+        in done.stderr
