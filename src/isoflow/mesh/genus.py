@@ -1548,7 +1548,9 @@ def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, f
             # tunnels have not settled) does not say that a finer grid may mend it
             # (an empty grid joined or broke nothing: the no_solid verdict says why)
             # fewer components may also be bodies smaller than a voxel, which a grid misses
-            small = int(np.count_nonzero(np.asarray(w.get("component_sizes", ())) < last["pitch"]))
+            # (counted where each component is a body: none overlaps, touches or nests in another)
+            sizes = () if w.get("overlap") else w.get("component_sizes", ())
+            small = int(np.count_nonzero(np.asarray(sizes) < last["pitch"]))
             notes.append(Note("body_count", {"bodies": bodies, "components": last["betti"][0],
                                              "resolution": last["resolution"], "pitch": last["pitch"],
                                              **({"small": small} if small and last["betti"][0] < bodies else {})}))
