@@ -914,7 +914,7 @@ def test_a_thread_count_given_as_text_is_refused_as_the_message_says(call):
     (lambda v: isoflow.run_flow(CUBE, 1, method=v), "method must be one of auto, numpy, compiled"),
     (lambda v: isoflow.voxelize_mesh(_box(), resolution=4, fill=v), "fill must be one of winding, shell, flood"),
     (lambda v: isoflow.voxelize_meshes([_box()], resolution=4, overlap=v), "overlap must be one of later, error"),
-    (lambda v: isoflow.verify_genus(_box(), [8], fill=v), "fill must be one of winding, shell, flood"),
+    (lambda v: isoflow.verify_genus(_box(), [8], fill=v), "verify_genus: fill must be one of winding, shell, flood"),
     (lambda v: isoflow.read_object(isoflow.data.example19(), points_are=v), "points_are must be 'corners' or 'voxels'"),
 ])
 def test_an_array_where_a_word_is_taken_is_refused_naming_the_argument(call, words, given):

@@ -653,3 +653,121 @@ def test_max_resolution_alone_keeps_the_default_grids_within_it(tmp_path, cap, g
     assert "resolutions asked" not in d["verdict"]
     v = verify_genus(tmp_path / "torus.ply", max_resolution=cap)  # the library's default alike
     assert [e["resolution"] for e in v.digital] == grids
+
+
+@pytest.mark.parametrize("shape", ["sphere", "torus"])
+def test_a_closed_surface_drawn_double_sided_stops_when_its_rows_settle(tmp_path, shape):
+    """A sphere (a torus) written with every face once each way round, as
+    exporters write two-sided surfaces: manifold3d's solid of it is empty
+    (the two faces of each pair cancel), so its 0 bodies never matched the
+    voxels, which read one face of each pair and fill the ball. The
+    command doubled the grid to --max-resolution for a count no grid
+    changes and said '1 digital component for the solid's 0 bodies ...
+    parts thinner than a voxel break apart'. The bodies are not compared:
+    it stops at 64 and 128, where the rows agree."""
+    import subprocess
+    import sys
+
+    import manifold3d
+    import trimesh
+
+    one = trimesh.creation.icosphere(2) if shape == "sphere" else trimesh.creation.torus(1, 0.35)
+    genus = manifold3d.Manifold(manifold3d.Mesh(one.vertices.astype(np.float32), one.faces.astype(np.uint32))).genus()
+    trimesh.Trimesh(one.vertices, np.vstack([one.faces, one.faces[:, ::-1]]), process=False).export(tmp_path / "two.ply")
+    done = subprocess.run([sys.executable, "-m", "isoflow", "genus", "two.ply", "--max-resolution", "256", "--json", "-q"],
+                          capture_output=True, text=True, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    r = json.loads(done.stdout)
+    assert [d["resolution"] for d in r["digital"]] == [64, 128]
+    assert [d["betti"] for d in r["digital"]] == [[1, genus, 0]] * 2  # a ball (a solid torus) read from one side
+    assert r["stop"] is None and r["bodies"] is None
+    assert "body_count" not in [n["kind"] for n in r["notes"]] and "0 bodies" not in r["verdict"]
+
+
+def _genus_json(cwd, *argv) -> dict:
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "isoflow", "genus", *map(str, argv), "--json", "-q"],
+                          capture_output=True, text=True, cwd=cwd)
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout)
+
+
+def test_a_body_smaller_than_a_voxel_is_not_said_to_merge(tmp_path):
+    """A 10-unit box and a 0.01-unit one 3 units off its side: two bodies
+    (trimesh's split), the small one shorter than a voxel at 256 (pitch
+    10/256 > 0.01), so no grid up to 256 holds more than its one voxel.
+    The note said 'bodies closer than a voxel merge at this resolution',
+    of bodies 3 units apart; it says the small one may be missed."""
+    import trimesh
+
+    big, speck = trimesh.creation.box([10, 10, 10]), trimesh.creation.box([0.01] * 3)
+    mesh = trimesh.util.concatenate([big, speck.apply_translation([8, 0, 0])])
+    assert len(mesh.split(only_watertight=False)) == 2 and min(mesh.split(only_watertight=False)[1].extents) < 10 / 256
+    mesh.export(tmp_path / "speck.ply")
+    r = _genus_json(tmp_path, "speck.ply", "--max-resolution", 256)
+    assert r["digital"][-1]["betti"][0] == 1 and r["bodies"] == 2
+    [note] = [n for n in r["notes"] if n["kind"] == "body_count"]
+    assert note["facts"]["small"] == 1
+    assert "merge" not in r["verdict"]
+    assert "1 of the mesh's components is smaller than a voxel" in r["verdict"]
+    assert GenusVerdict.from_dict(r).to_dict() == r
+    # bodies apart by less than a voxel, each many voxels long, still merge
+    apart = trimesh.util.concatenate([trimesh.creation.box([1, 1, 1]),
+                                      trimesh.creation.box([1, 1, 1]).apply_translation([1.001, 0, 0])])
+    apart.export(tmp_path / "apart.ply")
+    r = _genus_json(tmp_path, "apart.ply", "--resolution", 16, 32, "--no-step")
+    [note] = [n for n in r["notes"] if n["kind"] == "body_count"]
+    assert "small" not in note["facts"] and "bodies closer than a voxel merge" in r["verdict"]
+    # a speck inside the big box is no body of its own (manifold3d's union swallows it): the two
+    # boxes 0.001 apart beside it merge, and the speck is not blamed
+    swallowed = trimesh.util.concatenate([big, trimesh.creation.box([0.01] * 3).apply_translation([1, 1, 1]),
+                                          trimesh.creation.box([1, 1, 1]).apply_translation([8, 0, 0]),
+                                          trimesh.creation.box([1, 1, 1]).apply_translation([9.001, 0, 0])])
+    swallowed.export(tmp_path / "swallowed.ply")
+    r = _genus_json(tmp_path, "swallowed.ply", "--resolution", 32, 64, "--no-step")
+    assert (r["bodies"], r["digital"][-1]["betti"][0]) == (3, 2)
+    [note] = [n for n in r["notes"] if n["kind"] == "body_count"]
+    assert "small" not in note["facts"] and "bodies closer than a voxel merge" in r["verdict"]
+
+
+def test_an_empty_grid_is_not_said_to_merge_bodies(tmp_path):
+    """A torus at 1 voxel across encloses no voxel: the verdict says so
+    ('no solid'), and the body-count note had added '0 digital components
+    for the solid's 1 body ...: bodies closer than a voxel merge', of one
+    body."""
+    import trimesh
+
+    trimesh.creation.torus(1, 0.35).export(tmp_path / "torus.ply")
+    r = _genus_json(tmp_path, "torus.ply", "--resolution", 1, "--no-step")
+    assert r["kind"] == "no_solid" and r["digital"][-1]["betti"][0] == 0
+    assert "body_count" not in [n["kind"] for n in r["notes"]] and "merge" not in r["verdict"]
+
+
+def test_strict_says_the_edges_balance_only_once_faces_are_turned(tmp_path):
+    """genus --strict refuses a torus with 100 faces turned over (closed,
+    its edges inconsistently oriented) and says what genus does without
+    --strict. The line said "585 inconsistently oriented edges (... its
+    edges balance, so it bounds a solid ...)": of the edges it had just
+    counted as inconsistent. They balance once the 100 faces are turned
+    back, as trimesh's fix_normals turns them."""
+    import subprocess
+    import sys
+
+    import trimesh
+
+    torus = trimesh.creation.torus(1, 0.3)
+    faces = torus.faces.copy()
+    faces[:100] = faces[:100, ::-1]
+    trimesh.Trimesh(torus.vertices, faces, process=False).export(tmp_path / "turned.ply")
+    fixed = trimesh.Trimesh(torus.vertices, faces, process=False)
+    fixed.fix_normals()
+    turned = int(np.count_nonzero(np.any(fixed.faces != faces, axis=1)))
+    assert turned in (100, len(faces) - 100)  # fix_normals may turn the others instead: the same surface
+    done = subprocess.run([sys.executable, "-m", "isoflow", "genus", "turned.ply", "--strict", "--resolution", "16"],
+                          capture_output=True, text=True, cwd=tmp_path)
+    assert done.returncode == 2 and done.stdout == "" and len(done.stderr.splitlines()) == 1, done.stderr
+    assert "inconsistently oriented edges" in done.stderr
+    assert "its edges balance once 100 faces are turned over to agree with their neighbours, so it bounds a solid" \
+        in done.stderr

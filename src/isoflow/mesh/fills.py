@@ -144,13 +144,16 @@ class Voxelization(Result):
         return super().from_dict(given)
 
 
-def check_fill(fill: object) -> Fill:
+def check_fill(fill: object, caller: str = "voxelize") -> Fill:
     """``fill`` if it names a fill, else an IsoflowError naming the three.
 
     Parameters
     ----------
     fill : object
         What was given as ``fill``.
+    caller : str, optional
+        The function the message names (``verify_genus`` checks the same
+        words).
 
     Returns
     -------
@@ -164,7 +167,7 @@ def check_fill(fill: object) -> Fill:
     """
     chosen = choice_of(fill, FILLS)  # the plain string, which the result keeps
     if chosen is None:
-        raise IsoflowError(f"voxelize: fill must be one of {', '.join(FILLS)}, got {given_text(fill)}")
+        raise IsoflowError(f"{caller}: fill must be one of {', '.join(FILLS)}, got {given_text(fill)}")
     return chosen  # type: ignore[return-value]
 
 

@@ -941,7 +941,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] | None
     check_callable(progress, "progress", "progress(done, total)")
     check_callable(on_resolution, "on_resolution", "on_resolution(entry)")
     strict = check_strict(strict, "verify_genus")
-    fill = check_fill(fill)  # before any resolution runs: the verdict compares by it as a string
+    fill = check_fill(fill, "verify_genus")  # before any resolution runs: the verdict compares by it as a string
     # a 0D array is iterable by its type and not by NumPy, which raised TypeError from list()
     if resolutions is None:  # (a cap checked below; one that is not an int keeps the defaults for its refusal)
         cap = whole_given(max_resolution)
@@ -1238,6 +1238,16 @@ def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
     # along a non-manifold edge are solids touching along it (two boxes on
     # a common edge), whose union manifold3d builds as it splits the edge
     edge_joined = bool(balanced and mesh["nonmanifold_edges"] and not double_sided and not touching and not nested)
+    # each component's longest side: one shorter than a voxel holds at most
+    # one voxel centre, so a grid may miss it rather than merge it
+    ends = v[f].reshape(len(f), -1)
+    n = int(comp.max()) + 1 if len(comp) else 0
+    low = np.full((n, 3), np.inf)
+    high = np.full((n, 3), -np.inf)
+    for k in range(3):
+        np.minimum.at(low[:, k], comp, ends[:, k::3].min(axis=1))
+        np.maximum.at(high[:, k], comp, ends[:, k::3].max(axis=1))
+    out["component_sizes"] = (high - low).max(axis=1) if n else np.zeros(0)
     out.update(solid=solid, solid_genus=solid.get("genus"), crossing_self=crossing_self, balanced=balanced,
                nested=nested, overlap=touching or nested or edge_joined, edge_joined=edge_joined,
                double_sided=double_sided)
@@ -1272,9 +1282,20 @@ def reference_bodies(w: dict, fill: Fill) -> int | None:
     a point are two), for a flood fill of a solid with cavities those of
     the solid with its cavities filled (which swallows the bodies inside
     them), or None where there is no such solid or the voxels are not it:
-    a shell (whose components are surfaces)."""
+    a shell (whose components are surfaces), or faces drawn from both
+    sides other than walls between solids (manifold3d counts both faces of
+    each pair, which cancel: a closed surface drawn double-sided bounds no
+    body for it, where the voxeliser reads one face of each pair and fills
+    the solid it draws).
+
+    Examples
+    --------
+    >>> w = {"solid": {"bodies": 0, "cavities": 0}, "double_sided": {"n": 320}, "walled": False}
+    >>> reference_bodies(w, "winding"), reference_bodies(dict(w, double_sided=None), "winding")
+    (None, 0)
+    """
     solid = w["solid"]
-    if "bodies" not in solid or fill == "shell":
+    if "bodies" not in solid or fill == "shell" or (w.get("double_sided") and not w.get("walled")):
         return None
     if fill == "flood" and solid["cavities"]:
         return int(solid["filled_bodies"]) if "filled_bodies" in solid else None
@@ -1522,12 +1543,18 @@ def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, f
         if _corner_joined(w, last, bodies, fill):
             notes.append(Note("corner_joins", {"bodies": bodies, "components": last["betti"][0],
                                                "by": "flood" if fill == "flood" else "connectivity"}))
-        elif bodies is not None and last["betti"][0] != bodies and source != "voxels":
+        elif bodies is not None and last["betti"][0] not in (0, bodies) and source != "voxels":
             # a grid joins bodies closer than a voxel and breaks parts thinner
             # than one: the count alone (a disagree's words, or none where the
             # tunnels have not settled) does not say that a finer grid may mend it
+            # (an empty grid joined or broke nothing: the no_solid verdict says why)
+            # fewer components may also be bodies smaller than a voxel, which a grid misses
+            # (counted where each component is a body: none overlaps, touches or nests in another)
+            sizes = () if w.get("overlap") else w.get("component_sizes", ())
+            small = int(np.count_nonzero(np.asarray(sizes) < last["pitch"]))
             notes.append(Note("body_count", {"bodies": bodies, "components": last["betti"][0],
-                                             "resolution": last["resolution"], "pitch": last["pitch"]}))
+                                             "resolution": last["resolution"], "pitch": last["pitch"],
+                                             **({"small": small} if small and last["betti"][0] < bodies else {})}))
         if last["betti"][2] and fill != "shell":  # (a shell encloses the inside of each closed surface)
             notes.append(Note("cavities", {"n": last["betti"][2], "resolution": last["resolution"],
                                            "solid": w["solid"].get("cavities")}))

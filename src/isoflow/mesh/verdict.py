@@ -419,20 +419,31 @@ def _corner_join_words(bodies: int, components: int, by: str = "connectivity") -
             "enough grid, as manifold3d does")
 
 
-def _body_count_words(bodies: int, components: int, resolution: int, pitch: float) -> str:
+def _body_count_words(bodies: int, components: int, resolution: int, pitch: float, small: int = 0) -> str:
     """The ``body_count`` note: the finest grid's digital components are
     not the solid's bodies, and the likely cause, which a finer grid may
-    mend.
+    mend: bodies closer than a voxel, or ``small`` of the mesh's
+    components shorter than a voxel on every side, which hold one voxel
+    centre at most.
 
     Examples
     --------
     >>> _body_count_words(2, 1, 128, 0.0344813)
     "1 digital component for the solid's 2 bodies at resolution 128 (pitch 0.03448): bodies closer than a voxel \
 merge at this resolution; a finer --resolution (above 128) may part them"
+    >>> _body_count_words(2, 1, 256, 0.0508, small=1)
+    "1 digital component for the solid's 2 bodies at resolution 256 (pitch 0.0508): 1 of the mesh's components \
+is smaller than a voxel (one voxel at most, none where no voxel centre falls in it); a finer --resolution \
+(above 256) may show it"
     """
     said = (f"{counted(components, 'digital component')} for the solid's {counted(bodies, 'body', 'bodies')} at "
             f"resolution {resolution} (pitch {pitch:.4g}): ")
     finer = f"a finer --resolution (above {resolution})"
+    if components < bodies and small:
+        merge = "; bodies closer than a voxel merge" if small < bodies - components else ""
+        return said + (f"{small} of the mesh's components {'is' if small == 1 else 'are'} smaller than a voxel (one "
+                       f"voxel at most, none where no voxel centre falls in {'it' if small == 1 else 'them'}){merge}; "
+                       f"{finer} may show {'it' if small == 1 else 'them'}")
     if components < bodies:
         return said + f"bodies closer than a voxel merge at this resolution; {finer} may part them"
     return said + f"parts thinner than a voxel break apart at this resolution; {finer} may join them"

@@ -356,7 +356,12 @@ class Solid:
             rule = "it is read by the generalised winding number"
         else:  # double-sided faces read as one, coincident corners joined, T-junctions split: closed
             split = f" once split at its {counted(self.t_junctions['points'], 'T-junction')}" if self.t_junctions else ""
-            rule = f"its edges balance{split}, so it bounds a solid: it is read by the exact nonzero winding number"
+            # the counts above are the edges as given: where they are inconsistently
+            # oriented, they balance only once faces are turned over, which the rule says
+            turned = (f" once {counted(self.flipped, 'face')} {'is' if self.flipped == 1 else 'are'} turned over to "
+                      "agree with their neighbours" if self.flipped else "")
+            rule = (f"its edges balance{split}{turned}, so it bounds a solid: it is read by the exact nonzero "
+                    "winding number")
         return "; ".join(what), rule
 
     def no_area(self) -> bool:
