@@ -253,8 +253,9 @@ def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray, mate: np.ndarray 
     The faces left must use each edge an even number of times, which
     decides pairs that meet only pairs on an edge (two outer faces written
     both ways and the wall between their cubes), from those that other
-    faces decide or that lie in a plane of the bounding box (no solid
-    beyond them: no wall).
+    faces decide or that lie in a plane of the bounding box or another
+    supporting plane (no solid beyond them: no wall); sets still undecided
+    (a closed surface of pairs) are walls.
     A pair of zero-area faces (three corners on a line) draws nothing and
     is left as it is.
 
@@ -296,6 +297,7 @@ def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray, mate: np.ndarray 
     lo, hi = p[~flat].min(axis=(0, 1)), p[~flat].max(axis=(0, 1))
     q = p[first]
     outer = np.any(np.all(q == lo, axis=1) | np.all(q == hi, axis=1), axis=1)  # in a plane of the bounding box
+    outer |= _supporting(q, f[first], p[~flat].reshape(-1, 3), f[~flat].ravel())
     wall, patch, root = _walls(f[first], f[~paired & ~flat], n_vertices, outer)
     if not (wall | patch).all():
         wall |= _inside_walls(p[first], p[~paired & ~flat], root, ~wall & ~patch)
@@ -370,6 +372,20 @@ def _walls(kept: np.ndarray, single: np.ndarray, n_vertices: int,
     return np.where(kept_one < 0, wall, kept_one == 0), np.where(kept_one < 0, patch, kept_one == 1), root
 
 
+def _supporting(q: np.ndarray, kept: np.ndarray, corners: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """Which of the ``kept`` faces (corner coordinates ``q``) at the mesh's
+    last corner in (x, y, z) order lie in a supporting plane of the mesh
+    (every corner of a face on one side of it, or in it): no solid beyond
+    them, no wall."""
+    last = index[np.lexsort(corners.T[::-1])[-1]]
+    out = np.zeros(len(kept), dtype=bool)
+    for i in np.flatnonzero(np.any(kept == last, axis=1)):
+        other = ~np.isin(index, kept[i])  # its own corners lie in it, whatever the rounding
+        side = (corners[other] - q[i, 0]) @ np.cross(q[i, 1] - q[i, 0], q[i, 2] - q[i, 0])
+        out[i] = bool(np.all(side >= 0) or np.all(side <= 0))
+    return out
+
+
 def _closed_by_parity(m: int, key: np.ndarray, face: np.ndarray, covered: np.ndarray, odd: np.ndarray,
                       outer: np.ndarray) -> np.ndarray:
     """Per kept face (one per pair), 1 where its pair is read as one face,
@@ -387,8 +403,11 @@ def _closed_by_parity(m: int, key: np.ndarray, face: np.ndarray, covered: np.nda
     others are known.  A sheet with an edge no other face uses (an open
     surface drawn double-sided), or told both ways, is left open (-1).
     A sheet with an ``outer`` face (in a plane of the mesh's bounding box,
-    no solid beyond it) is no wall: kept, it decides the walls that meet
-    it where no unpaired face is (a model all of whose faces are pairs)."""
+    or in a supporting plane at its last corner: no solid beyond it) is no
+    wall: kept, it decides the walls that meet it where no unpaired face
+    is (a model all of whose faces are pairs).  Sheets that the edges
+    leave undecided lie in closed surfaces of pairs: the first is taken
+    for a wall and the rest follow, so the faces left still close."""
     from ..scale.graphs import components
 
     o = np.lexsort((face, key))
@@ -427,7 +446,8 @@ def _unit_parity(eq_start, eq_sheet, rhs, frozen, outer):
     # each equation: its sheets' values and rhs sum to an even number; a
     # sheet alone in one takes its value, an outer sheet is kept, and then
     # the last unknown sheet of every equation takes its value (the first
-    # value kept)
+    # value kept); where every equation left has two unknowns or more, the
+    # first sheet left is a wall and the rest follow from it
     n = len(frozen)
     value = np.full(n, -1, np.int8)
     seed = np.where(outer, np.int8(1), np.int8(-1))
@@ -461,21 +481,29 @@ def _unit_parity(eq_start, eq_sheet, rhs, frozen, outer):
             stack[top] = t
             top += 1
             value[t] = seed[t]
-    while top > 0:
-        top -= 1
-        t = stack[top]
-        for j in range(count[t], count[t + 1]):
-            e = sheet_eq[j]
-            unknown[e] -= 1
-            parity[e] ^= value[t]
-            if unknown[e] == 1:
-                for i in range(eq_start[e], eq_start[e + 1]):
-                    u = eq_sheet[i]
-                    if value[u] < 0 and not clash[u]:
-                        value[u] = parity[e]
-                        stack[top] = u
-                        top += 1
-    return value
+    nxt = 0
+    while True:
+        while top > 0:
+            top -= 1
+            t = stack[top]
+            for j in range(count[t], count[t + 1]):
+                e = sheet_eq[j]
+                unknown[e] -= 1
+                parity[e] ^= value[t]
+                if unknown[e] == 1:
+                    for i in range(eq_start[e], eq_start[e + 1]):
+                        u = eq_sheet[i]
+                        if value[u] < 0 and not clash[u]:
+                            value[u] = parity[e]
+                            stack[top] = u
+                            top += 1
+        while nxt < n and (value[nxt] >= 0 or clash[nxt] or count[nxt + 1] == count[nxt]):
+            nxt += 1
+        if nxt == n:
+            return value
+        value[nxt] = 0  # no edge tells it: a wall, dropped (the union)
+        stack[top] = nxt
+        top += 1
 
 
 #: the most (point, triangle) solid angles that :func:`_inside_walls`
