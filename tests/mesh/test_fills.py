@@ -308,7 +308,12 @@ def _double(f, reversed_first=False):
                          ids=lambda e: e["mesh"])
 def test_double_sided_closed_meshes_give_the_single_sided_voxels(entry):
     """Every face also written reversed (after it, or before it): the same
-    voxels, bit for bit, as the digests of the single-sided mesh."""
+    voxels, bit for bit, as the digests of the single-sided mesh, every
+    face read as one but those of a wall between two parts of the model
+    (joined_tetrahedra.obj: the triangle both tetrahedra write; not_convex:
+    a square that two touching blocks write, cut along either diagonal),
+    dropped there as in the single-sided mesh."""
+    in_walls = {"joined_tetrahedra.obj": 2, "not_convex.obj": 4}.get(entry["mesh"], 0)
     v, f = load_mesh(MESHES / entry["mesh"])
     for first in (False, True):
         r = voxelize(v, _double(f, first), resolution=64, details=True)
@@ -316,7 +321,7 @@ def test_double_sided_closed_meshes_give_the_single_sided_voxels(entry):
         assert hashlib.sha256(np.packbits(r.volume).tobytes()).hexdigest() == entry["sha256"], first
         p = v[f]
         drawn = int(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]).any(axis=1).sum())  # zero-area pairs stay
-        assert r.double_sided_faces == drawn and "double-sided" in r.note
+        assert r.double_sided_faces == drawn - in_walls and "double-sided" in r.note
 
 
 @pytest.mark.parametrize("name", CLOSED)

@@ -250,6 +250,12 @@ def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray, mate: np.ndarray 
     surface drawn double-sided (a box with one side written both ways):
     the unpaired faces leave a hole there that one face of each pair
     closes, where a wall's edges are used by the solids on both sides.
+    The faces left must use each edge an even number of times, which
+    decides pairs that meet only pairs on an edge (two outer faces written
+    both ways and the wall between their cubes), from those that other
+    faces decide or that lie in a plane of the bounding box or another
+    supporting plane (no solid beyond them: no wall); sets still undecided
+    (a closed surface of pairs) are walls.
     A pair of zero-area faces (three corners on a line) draws nothing and
     is left as it is.
 
@@ -288,7 +294,11 @@ def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray, mate: np.ndarray 
     if not paired.any():
         return f, 0
     first = paired & (np.arange(len(f)) < mate)
-    wall, patch, root = _walls(f[first], f[~paired & ~flat], n_vertices)
+    lo, hi = p[~flat].min(axis=(0, 1)), p[~flat].max(axis=(0, 1))
+    q = p[first]
+    outer = np.any(np.all(q == lo, axis=1) | np.all(q == hi, axis=1), axis=1)  # in a plane of the bounding box
+    outer |= _supporting(q, f[first], p[~flat].reshape(-1, 3), f[~flat].ravel())
+    wall, patch, root = _walls(f[first], f[~paired & ~flat], n_vertices, outer)
     if not (wall | patch).all():
         wall |= _inside_walls(p[first], p[~paired & ~flat], root, ~wall & ~patch)
     drop = paired.copy()
@@ -297,7 +307,8 @@ def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray, mate: np.ndarray 
     return f[~drop], int(len(kept))
 
 
-def _walls(kept: np.ndarray, single: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _walls(kept: np.ndarray, single: np.ndarray, n_vertices: int,
+           outer: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Which of the ``kept`` faces (one per pair) lie in a wall, which in a
     patch of a surface drawn double-sided, and each one's component.
 
@@ -319,17 +330,18 @@ def _walls(kept: np.ndarray, single: np.ndarray, n_vertices: int) -> tuple[np.nd
     from ..scale.graphs import components
 
     m = len(kept)
-    if len(single) == 0:
-        return np.zeros(m, dtype=bool), np.zeros(m, dtype=bool), edge_table(kept, n_vertices)[5]
     n = np.int64(max(n_vertices, 1))
-    slo, shi, sfwd, sbwd, _, _ = edge_table(single, n_vertices)
-    order = np.argsort(slo * n + shi)
-    skey, suses = (slo * n + shi)[order], (sfwd + sbwd)[order]
     a, b = kept.ravel(), np.roll(kept, -1, axis=1).ravel()
     face = np.repeat(np.arange(m), 3)
     real = a != b
     a, b, face = a[real], b[real], face[real]
     key = np.minimum(a, b) * n + np.maximum(a, b)
+    if len(single) == 0:
+        kept_one = _closed_by_parity(m, key, face, np.zeros(len(key), dtype=bool), np.zeros(len(key), dtype=bool), outer)
+        return kept_one == 0, kept_one == 1, edge_table(kept, n_vertices)[5]
+    slo, shi, sfwd, sbwd, _, _ = edge_table(single, n_vertices)
+    order = np.argsort(slo * n + shi)
+    skey, suses = (slo * n + shi)[order], (sfwd + sbwd)[order]
     at = np.minimum(np.searchsorted(skey, key), len(skey) - 1)
     covered = skey[at] == key
     odd = covered & (suses[at] % 2 == 1)
@@ -355,7 +367,143 @@ def _walls(kept: np.ndarray, single: np.ndarray, n_vertices: int) -> tuple[np.nd
     bare = np.zeros(m, dtype=bool)
     bare[np.repeat(root, 3)[~reached[kept.ravel()]]] = True
     patch = has_free & ~even_edge
-    return ((has_free & ~open_edge & ~patch) | (~has_free & ~bare))[root], patch[root], root
+    wall, patch = ((has_free & ~open_edge & ~patch) | (~has_free & ~bare))[root], patch[root]
+    kept_one = _closed_by_parity(m, key, face, covered, odd, outer)
+    return np.where(kept_one < 0, wall, kept_one == 0), np.where(kept_one < 0, patch, kept_one == 1), root
+
+
+def _supporting(q: np.ndarray, kept: np.ndarray, corners: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """Which of the ``kept`` faces (corner coordinates ``q``) at the mesh's
+    last corner in (x, y, z) order lie in a supporting plane of the mesh
+    (every corner of a face on one side of it, or in it): no solid beyond
+    them, no wall."""
+    last = index[np.lexsort(corners.T[::-1])[-1]]
+    out = np.zeros(len(kept), dtype=bool)
+    for i in np.flatnonzero(np.any(kept == last, axis=1)):
+        other = ~np.isin(index, kept[i])  # its own corners lie in it, whatever the rounding
+        side = (corners[other] - q[i, 0]) @ np.cross(q[i, 1] - q[i, 0], q[i, 2] - q[i, 0])
+        out[i] = bool(np.all(side >= 0) or np.all(side <= 0))
+    return out
+
+
+def _closed_by_parity(m: int, key: np.ndarray, face: np.ndarray, covered: np.ndarray, odd: np.ndarray,
+                      outer: np.ndarray) -> np.ndarray:
+    """Per kept face (one per pair), 1 where its pair is read as one face,
+    0 where it is dropped as a wall, -1 where the edges leave it open.
+
+    The pairs are taken in sheets, joined across edges that two of them
+    use and no unpaired face.  The faces left must use each edge an even
+    number of times (a closed surface): an edge used by the unpaired faces
+    ``u`` times and by sheets ``s1 .. sk`` an odd number of times each
+    gives ``u + x1 + .. + xk`` even, ``x`` 1 for a sheet kept.  An edge of
+    one sheet alone decides it (the unpaired faces have a hole there, or
+    meet a wall of two solids); an edge where outer pairs meet a wall and
+    nothing else (two outer faces side by side, both written both ways,
+    and the wall between their cubes) decides the last sheet once the
+    others are known.  A sheet with an edge no other face uses (an open
+    surface drawn double-sided), or told both ways, is left open (-1).
+    A sheet with an ``outer`` face (in a plane of the mesh's bounding box,
+    or in a supporting plane at its last corner: no solid beyond it) is no
+    wall: kept, it decides the walls that meet it where no unpaired face
+    is (a model all of whose faces are pairs).  Sheets that the edges
+    leave undecided lie in closed surfaces of pairs: the first is taken
+    for a wall and the rest follow, so the faces left still close."""
+    from ..scale.graphs import components
+
+    o = np.lexsort((face, key))
+    k, fo, cov, od = key[o], face[o], covered[o], odd[o]
+    start = np.flatnonzero(np.r_[True, k[1:] != k[:-1]])
+    uses = np.diff(np.r_[start, len(k)])
+    two = np.repeat(uses == 2, uses) & ~cov
+    join = two[1:] & (k[1:] == k[:-1])
+    _, sheet = components(m, fo[:-1][join], fo[1:][join])
+    n_sheets = int(sheet.max()) + 1 if m else 0
+    # each (edge, sheet) once, with the sheet's uses of it odd
+    s = sheet[fo]
+    o2 = np.lexsort((s, k))
+    k2, s2, cov2, od2 = k[o2], s[o2], cov[o2], od[o2]
+    begin = np.flatnonzero(np.r_[True, (k2[1:] != k2[:-1]) | (s2[1:] != s2[:-1])])
+    free = begin[np.diff(np.r_[begin, len(k2)]) % 2 == 1]
+    ek, es, ecov, eodd = k2[free], s2[free], cov2[free], od2[free]
+    estart = np.flatnonzero(np.r_[len(ek) > 0, ek[1:] != ek[:-1]])
+    esize = np.diff(np.r_[estart, len(ek)])
+    # an edge that only one sheet uses, and no unpaired face: open
+    bare_edge = (esize == 1) & ~ecov[estart]
+    open_sheet = np.zeros(n_sheets, dtype=bool)
+    open_sheet[es[estart[bare_edge]]] = True
+    eq = ~bare_edge
+    eqstart, eqsize = estart[eq], esize[eq]
+    rhs = eodd[eqstart].astype(np.int8)
+    on_box = np.zeros(n_sheets, dtype=bool)
+    on_box[sheet[outer]] = True
+    value = _unit_parity(np.r_[0, np.cumsum(eqsize)].astype(np.int64), es[np.repeat(eq, esize)].astype(np.int64), rhs,
+                         open_sheet, on_box & ~open_sheet)
+    return value[sheet]
+
+
+@njit(cache=True, nogil=True)
+def _unit_parity(eq_start, eq_sheet, rhs, frozen, outer):
+    # each equation: its sheets' values and rhs sum to an even number; a
+    # sheet alone in one takes its value, an outer sheet is kept, and then
+    # the last unknown sheet of every equation takes its value (the first
+    # value kept); where every equation left has two unknowns or more, the
+    # first sheet left is a wall and the rest follow from it
+    n = len(frozen)
+    value = np.full(n, -1, np.int8)
+    seed = np.where(outer, np.int8(1), np.int8(-1))
+    clash = frozen.copy()
+    n_eq = len(eq_start) - 1
+    for e in range(n_eq):
+        if eq_start[e + 1] - eq_start[e] == 1:
+            t = eq_sheet[eq_start[e]]
+            if seed[t] >= 0 and seed[t] != rhs[e]:
+                clash[t] = True
+            seed[t] = rhs[e]
+    count = np.zeros(n + 1, np.int64)
+    for i in range(len(eq_sheet)):
+        count[eq_sheet[i] + 1] += 1
+    for t in range(n):
+        count[t + 1] += count[t]
+    sheet_eq = np.empty(len(eq_sheet), np.int64)
+    fill = count[:-1].copy()
+    for e in range(n_eq):
+        for i in range(eq_start[e], eq_start[e + 1]):
+            sheet_eq[fill[eq_sheet[i]]] = e
+            fill[eq_sheet[i]] += 1
+    unknown = np.zeros(n_eq, np.int64)
+    parity = rhs.astype(np.int64)
+    for e in range(n_eq):
+        unknown[e] = eq_start[e + 1] - eq_start[e]
+    stack = np.empty(n + n_eq + 1, np.int64)
+    top = 0
+    for t in range(n):
+        if seed[t] >= 0 and not clash[t]:
+            stack[top] = t
+            top += 1
+            value[t] = seed[t]
+    nxt = 0
+    while True:
+        while top > 0:
+            top -= 1
+            t = stack[top]
+            for j in range(count[t], count[t + 1]):
+                e = sheet_eq[j]
+                unknown[e] -= 1
+                parity[e] ^= value[t]
+                if unknown[e] == 1:
+                    for i in range(eq_start[e], eq_start[e + 1]):
+                        u = eq_sheet[i]
+                        if value[u] < 0 and not clash[u]:
+                            value[u] = parity[e]
+                            stack[top] = u
+                            top += 1
+        while nxt < n and (value[nxt] >= 0 or clash[nxt] or count[nxt + 1] == count[nxt]):
+            nxt += 1
+        if nxt == n:
+            return value
+        value[nxt] = 0  # no edge tells it: a wall, dropped (the union)
+        stack[top] = nxt
+        top += 1
 
 
 #: the most (point, triangle) solid angles that :func:`_inside_walls`
