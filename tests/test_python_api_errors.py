@@ -337,8 +337,8 @@ def test_verify_genus_checks_its_arguments_as_the_command_line_does(args, kwargs
 
 
 @pytest.mark.parametrize(("call", "words"), [
-    (lambda s: isoflow.voxelize_mesh(_box(), resolution=4, strict=s), "voxelize: strict"),
-    (lambda s: isoflow.voxelize_meshes([_box()], resolution=4, strict=s), "voxelize: strict"),
+    (lambda s: isoflow.voxelize_mesh(_box(), resolution=4, strict=s), "voxelize_mesh: strict"),
+    (lambda s: isoflow.voxelize_meshes([_box()], resolution=4, strict=s), "voxelize_meshes: strict"),
     (lambda s: isoflow.verify_genus(_box(), resolutions=(4,), strict=s), "verify_genus: strict"),
 ])
 @pytest.mark.parametrize("strict", ["no", 1, None])
@@ -378,15 +378,30 @@ def test_a_switch_given_as_a_numpy_bool_is_taken_as_the_bool():
     assert "surfaces" not in isoflow.analyze(CUBE, surfaces=np.False_)
 
 
-@pytest.mark.parametrize("call", [
-    lambda s, tmp: isoflow.voxelize_to_zarr(_box(), tmp / "v.zarr", resolution=4, strict=s),
-    lambda s, tmp: isoflow.voxelize_file(tmp / "box.stl", resolution=4, strict=s),
-])
-def test_a_strict_that_is_no_bool_is_refused_before_a_file_is_read_or_written(call, tmp_path):
+VOXELIZING_CALLS = [
+    ("voxelize_to_zarr", lambda tmp, **k: isoflow.voxelize_to_zarr(_box(), tmp / "v.zarr", resolution=4, **k)),
+    ("voxelize_file", lambda tmp, **k: isoflow.voxelize_file(tmp / "box.stl", resolution=4, **k)),
+    ("voxelize_meshes", lambda tmp, **k: isoflow.voxelize_meshes([_box()], resolution=4, **k)),
+    ("voxelize_mesh", lambda tmp, **k: isoflow.voxelize_mesh(_box(), resolution=4, **k)),
+]
+
+
+@pytest.mark.parametrize(("name", "call"), VOXELIZING_CALLS)
+def test_a_strict_that_is_no_bool_is_refused_before_a_file_is_read_or_written(name, call, tmp_path):
     pytest.importorskip("zarr")
     _box().export(tmp_path / "box.stl")
-    with pytest.raises(IsoflowError, match=re.escape("voxelize: strict must be True or False, got 'no'")):
-        call("no", tmp_path)
+    with pytest.raises(IsoflowError, match=re.escape(f"{name}: strict must be True or False, got 'no'")):
+        call(tmp_path, strict="no")
+    assert not (tmp_path / "v.zarr").exists()
+
+
+@pytest.mark.parametrize(("name", "call"), VOXELIZING_CALLS)
+def test_a_fill_that_is_none_of_the_three_names_the_function_called(name, call, tmp_path):
+    # voxelize_meshes and voxelize_to_zarr said "voxelize: fill must be ...", a function not called
+    pytest.importorskip("zarr")
+    _box().export(tmp_path / "box.stl")
+    with pytest.raises(IsoflowError, match=re.escape(f"{name}: fill must be one of winding, shell, flood, got 'x'")):
+        call(tmp_path, fill="x")
     assert not (tmp_path / "v.zarr").exists()
 
 
@@ -913,7 +928,8 @@ def test_a_thread_count_given_as_text_is_refused_as_the_message_says(call):
     (lambda v: isoflow.configuration_histogram(CUBE, method=v), "method must be one of auto, numpy, compiled"),
     (lambda v: isoflow.run_flow(CUBE, 1, method=v), "method must be one of auto, numpy, compiled"),
     (lambda v: isoflow.voxelize_mesh(_box(), resolution=4, fill=v), "fill must be one of winding, shell, flood"),
-    (lambda v: isoflow.voxelize_meshes([_box()], resolution=4, overlap=v), "overlap must be one of later, error"),
+    (lambda v: isoflow.voxelize_meshes([_box()], resolution=4, overlap=v),
+     "voxelize_meshes: overlap must be one of later, error"),
     (lambda v: isoflow.verify_genus(_box(), [8], fill=v), "verify_genus: fill must be one of winding, shell, flood"),
     (lambda v: isoflow.read_object(isoflow.data.example19(), points_are=v), "points_are must be 'corners' or 'voxels'"),
 ])
