@@ -387,21 +387,16 @@ VOXELIZING_CALLS = [
 
 
 @pytest.mark.parametrize(("name", "call"), VOXELIZING_CALLS)
-def test_a_strict_that_is_no_bool_is_refused_before_a_file_is_read_or_written(name, call, tmp_path):
-    pytest.importorskip("zarr")
-    _box().export(tmp_path / "box.stl")
-    with pytest.raises(IsoflowError, match=re.escape(f"{name}: strict must be True or False, got 'no'")):
-        call(tmp_path, strict="no")
-    assert not (tmp_path / "v.zarr").exists()
-
-
-@pytest.mark.parametrize(("name", "call"), VOXELIZING_CALLS)
-def test_a_fill_that_is_none_of_the_three_names_the_function_called(name, call, tmp_path):
+@pytest.mark.parametrize(("argument", "words"), [
+    ({"strict": "no"}, "strict must be True or False, got 'no'"),
     # voxelize_meshes and voxelize_to_zarr said "voxelize: fill must be ...", a function not called
+    ({"fill": "x"}, "fill must be one of winding, shell, flood, got 'x'"),
+])
+def test_a_bad_fill_or_strict_names_the_function_called_before_a_file_is_written(name, call, argument, words, tmp_path):
     pytest.importorskip("zarr")
     _box().export(tmp_path / "box.stl")
-    with pytest.raises(IsoflowError, match=re.escape(f"{name}: fill must be one of winding, shell, flood, got 'x'")):
-        call(tmp_path, fill="x")
+    with pytest.raises(IsoflowError, match=re.escape(f"{name}: {words}")):
+        call(tmp_path, **argument)
     assert not (tmp_path / "v.zarr").exists()
 
 
