@@ -1031,6 +1031,29 @@ def test_a_float32_file_that_holds_one_point_is_not_blamed_on_a_far_face(tmp_pat
     assert "far from the others" not in line
 
 
+@pytest.mark.parametrize("given", ["float64", "origin.obj"])
+def test_one_point_that_float32_did_not_make_is_not_blamed_on_float32(tmp_path, capsys, given):
+    """A float64 mesh in memory whose corners all sit at one point, and a
+    file whose corners all say 0 0 0: the line spoke of "float32 coordinates
+    ... 1.4e-45 apart", which explains nothing there (the corners are one
+    point as given). It says what is wrong: one position, no face with
+    area. trimesh agrees that the face has no area."""
+    import isoflow
+
+    vertices, faces = np.zeros((3, 3)), np.array([[0, 1, 2]])
+    assert trimesh.Trimesh(vertices, faces, process=False).area == 0
+    if given == "float64":
+        with pytest.raises(isoflow.IsoflowError) as info:
+            isoflow.verify_genus((vertices, faces), [8])
+        line = str(info.value)
+    else:
+        (tmp_path / given).write_text("v 0 0 0\nv 0 0 0\nv 0 0 0\nf 1 2 3\n")
+        line = fails(capsys, "genus", tmp_path / given, "--resolution", 8)
+    assert line.endswith("empty mesh: every corner of every face lies at one position, [0.0, 0.0, 0.0]; "
+                         "no face has area"), line
+    assert "float32 coordinates" not in line and "apart" not in line
+
+
 def test_a_refused_info_leaves_no_thread_warming_up(tmp_path, capsys, monkeypatch):
     """info loads numba on a second thread while it reads a large input; on
     a refusal that thread was left running after the command, and numba's

@@ -337,8 +337,8 @@ def test_verify_genus_checks_its_arguments_as_the_command_line_does(args, kwargs
 
 
 @pytest.mark.parametrize(("call", "words"), [
-    (lambda s: isoflow.voxelize_mesh(_box(), resolution=4, strict=s), "voxelize: strict"),
-    (lambda s: isoflow.voxelize_meshes([_box()], resolution=4, strict=s), "voxelize: strict"),
+    (lambda s: isoflow.voxelize_mesh(_box(), resolution=4, strict=s), "voxelize_mesh: strict"),
+    (lambda s: isoflow.voxelize_meshes([_box()], resolution=4, strict=s), "voxelize_meshes: strict"),
     (lambda s: isoflow.verify_genus(_box(), resolutions=(4,), strict=s), "verify_genus: strict"),
 ])
 @pytest.mark.parametrize("strict", ["no", 1, None])
@@ -378,15 +378,25 @@ def test_a_switch_given_as_a_numpy_bool_is_taken_as_the_bool():
     assert "surfaces" not in isoflow.analyze(CUBE, surfaces=np.False_)
 
 
-@pytest.mark.parametrize("call", [
-    lambda s, tmp: isoflow.voxelize_to_zarr(_box(), tmp / "v.zarr", resolution=4, strict=s),
-    lambda s, tmp: isoflow.voxelize_file(tmp / "box.stl", resolution=4, strict=s),
+VOXELIZING_CALLS = [
+    ("voxelize_to_zarr", lambda tmp, **k: isoflow.voxelize_to_zarr(_box(), tmp / "v.zarr", resolution=4, **k)),
+    ("voxelize_file", lambda tmp, **k: isoflow.voxelize_file(tmp / "box.stl", resolution=4, **k)),
+    ("voxelize_meshes", lambda tmp, **k: isoflow.voxelize_meshes([_box()], resolution=4, **k)),
+    ("voxelize_mesh", lambda tmp, **k: isoflow.voxelize_mesh(_box(), resolution=4, **k)),
+]
+
+
+@pytest.mark.parametrize(("name", "call"), VOXELIZING_CALLS)
+@pytest.mark.parametrize(("argument", "words"), [
+    ({"strict": "no"}, "strict must be True or False, got 'no'"),
+    # voxelize_meshes and voxelize_to_zarr said "voxelize: fill must be ...", a function not called
+    ({"fill": "x"}, "fill must be one of winding, shell, flood, got 'x'"),
 ])
-def test_a_strict_that_is_no_bool_is_refused_before_a_file_is_read_or_written(call, tmp_path):
+def test_a_bad_fill_or_strict_names_the_function_called_before_a_file_is_written(name, call, argument, words, tmp_path):
     pytest.importorskip("zarr")
     _box().export(tmp_path / "box.stl")
-    with pytest.raises(IsoflowError, match=re.escape("voxelize: strict must be True or False, got 'no'")):
-        call("no", tmp_path)
+    with pytest.raises(IsoflowError, match=re.escape(f"{name}: {words}")):
+        call(tmp_path, **argument)
     assert not (tmp_path / "v.zarr").exists()
 
 
@@ -913,7 +923,8 @@ def test_a_thread_count_given_as_text_is_refused_as_the_message_says(call):
     (lambda v: isoflow.configuration_histogram(CUBE, method=v), "method must be one of auto, numpy, compiled"),
     (lambda v: isoflow.run_flow(CUBE, 1, method=v), "method must be one of auto, numpy, compiled"),
     (lambda v: isoflow.voxelize_mesh(_box(), resolution=4, fill=v), "fill must be one of winding, shell, flood"),
-    (lambda v: isoflow.voxelize_meshes([_box()], resolution=4, overlap=v), "overlap must be one of later, error"),
+    (lambda v: isoflow.voxelize_meshes([_box()], resolution=4, overlap=v),
+     "voxelize_meshes: overlap must be one of later, error"),
     (lambda v: isoflow.verify_genus(_box(), [8], fill=v), "verify_genus: fill must be one of winding, shell, flood"),
     (lambda v: isoflow.read_object(isoflow.data.example19(), points_are=v), "points_are must be 'corners' or 'voxels'"),
 ])

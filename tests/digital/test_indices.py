@@ -180,6 +180,30 @@ def test_planar_index_refuses_what_is_no_2d_set_of_points():
             I.planar_index(np.full((3, 3), value))
 
 
+def test_planar_index_of_a_label_image_offers_its_own_remedy():
+    """A label image given to planar_index was told to use
+    isoflow.label_table, which has no planar index. The remedy it now
+    offers, one label's points, runs and sums to 4 chi (scikit-image's
+    Euler number at 4-connectivity)."""
+    import re
+
+    from isoflow.errors import IsoflowError
+
+    image = np.zeros((7, 8), np.uint8)
+    image[1:6, 1:4] = 1
+    image[1:6, 5:8] = 2
+    image[3, 6] = 0  # a hole in label 2: chi 0
+    with pytest.raises(IsoflowError) as info:
+        I.planar_index(image)
+    message = str(info.value)
+    assert "label_table" not in message
+    remedy = re.search(r"planar_index\(image == (\d+)\)", message)
+    assert remedy is not None, message
+    label = int(remedy[1])
+    assert int(I.planar_index(image == label).sum()) == 4 * euler_number(image == label, connectivity=1)
+    assert euler_number(image == 2, connectivity=1) == 0
+
+
 @pytest.mark.parametrize("points", [[1, 2, 3], np.arange(8).reshape(2, 2, 2), [[[0.5]]], 7])
 def test_planar_index_says_the_shape_before_the_values(points):
     """``planar_index([1, 2, 3])`` said "not a binary volume (2 voxels ...)":

@@ -221,6 +221,27 @@ def test_flow_out_force_replaces_links_of_an_earlier_run_not_what_they_name(tmp_
             if f.is_file() and out not in f.parents and f.name != "cube.npy"} == kept
 
 
+def test_a_step_named_link_to_a_folder_of_the_user_s_does_not_block_the_run(tmp_path):
+    """A link named step_005.zarr to a directory that is no zarr store:
+    told from a real directory by its name only, it made --force refuse
+    the whole run. It is the run's to remove: unlinked, what it leads to
+    kept byte for byte."""
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("mine")
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "step_005.zarr").symlink_to(mine, target_is_directory=True)
+    np.save(tmp_path / "cube.npy", np.ones((3, 3, 3), bool))
+    p = subprocess.run([sys.executable, "-m", "isoflow", "flow", str(tmp_path / "cube.npy"), "--out", str(out),
+                        "--force", "-q"], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert not (out / "step_005.zarr").is_symlink() and not (out / "step_005.zarr").exists()
+    assert [f.name for f in mine.iterdir()] == ["notes.txt"] and (mine / "notes.txt").read_text() == "mine"
+    # a 3x3x3 cube: 6 faces of 9 squares, 2 triangles each
+    assert len(trimesh.load(out / "step_000.ply", process=False).faces) == 6 * 9 * 2
+
+
 def test_step_volumes_a_format_cannot_hold_are_refused_before_the_flow(tmp_path):
     # binvox holds 3D voxels of one size: a 2D image or a pitch per axis
     # was refused when step 0 was written, after the input was read and
@@ -263,6 +284,42 @@ def test_a_failed_first_run_does_not_speak_of_a_previous_run(tmp_path, monkeypat
         rc, stdout, err = run("flow", tmp_path / "img.npy", "--out", tmp_path / "empty", "--volumes", ".npz", "--force")
     assert rc == 2 and err.strip().endswith("; the previous run's files in the directory are unchanged")
     assert {p.name: p.read_bytes() for p in (tmp_path / "empty").iterdir()} == before
+
+
+@pytest.mark.parametrize("fails", [1, 2])
+def test_a_rename_that_fails_part_way_says_what_it_replaced(tmp_path, monkeypatch, fails):
+    """The final renames into --out: the second failing (an I/O error)
+    said "the previous run is unchanged" with the first new file in place.
+    The line now counts what was put in place; the files that differ from
+    the previous run's are exactly that many."""
+    import os
+
+    np.save(tmp_path / "a.npy", np.pad(np.ones((6, 6, 6), bool), 2))
+    np.save(tmp_path / "b.npy", np.pad(np.ones((4, 5, 6), bool), 2))
+    out = tmp_path / "run"
+    assert run("flow", tmp_path / "a.npy", "--steps", "2", "--out", out)[0] == 0
+    before = {f.name: f.read_bytes() for f in out.iterdir()}
+    real, calls = os.replace, []
+
+    def failing(src, dst, *a, **k):
+        if Path(dst).parent == out:  # the renames into the run's directory, not those inside the staging one
+            calls.append(dst)
+            if len(calls) == fails:
+                raise OSError(5, "Input/output error", str(dst))
+        return real(src, dst, *a, **k)
+
+    monkeypatch.setattr(os, "replace", failing)
+    rc, _, err = run("flow", tmp_path / "b.npy", "--steps", "2", "--out", out, "--force")
+    monkeypatch.setattr(os, "replace", real)
+    after = {f.name: f.read_bytes() for f in out.iterdir()}
+    changed = sorted(n for n in after if before.get(n) != after[n])
+    assert rc == 2 and len(changed) == fails - 1 and sorted(after) == sorted(before)
+    assert len(err.strip().splitlines()) == 1 and "Input/output error" in err
+    if fails == 1:
+        assert err.strip().endswith("the previous run's files in the directory are unchanged")
+    else:
+        assert "unchanged" not in err and "1 of this run's" in err and "files of both runs" in err
+    assert not [f for f in out.iterdir() if f.name.startswith(".")]  # the staging directory is gone
 
 
 @pytest.mark.parametrize("at", ["progress_bar", "bar_total"])

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
-from ..scale.arrays import as_array, binary, refuse_object
+from ..scale.arrays import NotBinary, as_array, binary, refuse_object
 from .configurations import check_dimension, face_connected, full_window, octants, read_only, window_faces
 from .connectivity import is_face_connectivity, resolve_connectivity
 
@@ -525,7 +525,14 @@ def planar_index(points: ArrayLike) -> np.ndarray:
     given = as_array(points, "points")
     if given.ndim != 2:
         raise IsoflowError(f"points: planar_index takes a 2D array, got a {given.ndim}D array of shape {given.shape}")
-    grid = binary(given, "points")
+    try:
+        grid = binary(given, "points")
+    except NotBinary as exc:
+        # label_table, offered for a label image, has no planar index: one label's points have
+        label = exc.kind == "labels" and given.dtype.kind in "iu"
+        first = given[(given != 0) & (given != 1)].flat[0] if label else None
+        hint = f", or one label's points: planar_index(image == {first})" if label else ""
+        raise NotBinary(exc.bare + hint, exc.bare, every=False, ndim=2, kind=exc.kind) from None
     f = np.pad(grid, 1).astype(np.int8)
     c = f[1:-1, 1:-1]
     # x1..x8 anticlockwise from (m+1, n): eq. 4.1 with diagonals in between.

@@ -254,8 +254,10 @@ def check_output_dir(directory, force: bool = False):
                                   f"{out}: directory is not empty; pass --force to overwrite its files")
     if out.is_dir():
         for taken in _run_names(out):
-            # --force replaces a run's files, never a directory of the user's that bears one's name
-            if taken.is_dir() and not (taken.suffix.lower() == ".zarr" and _is_zarr_store(taken)):
+            # --force replaces a run's files, never a directory of the user's that bears one's name; a link
+            # of that name is the run's to remove (unlinked, what it leads to kept), whatever it leads to
+            if taken.is_dir() and not taken.is_symlink() and not (taken.suffix.lower() == ".zarr"
+                                                                  and _is_zarr_store(taken)):
                 raise IsoflowError(f"{taken}: a directory that is not a step store of a run; flow --force "
                                    "replaces a run's files, not it: move it, or give --out another directory")
     parent = out if out.is_dir() else next((p for p in out.parents if p.exists()), Path("."))
@@ -525,27 +527,58 @@ class FlowWriter:
 
     def _commit(self) -> list:
         """Move the staged files over the output directory's, then remove the
-        previous run's files that this run did not replace."""
+        previous run's files that this run did not replace. A failure (or an
+        interrupt) part way says what it left: the previous run unchanged
+        only where none of this run's files was put in place yet."""
         new = set(self.staged)
         with self._named():  # a signal a library swallowed: the previous run stays
             interrupted_by_signal()
+        done, target, emptied = 0, self.out, False
         try:
             for name in self.staged:
-                if (self.out / name).is_symlink():  # a step store's name that is a link: a rename cannot take it
-                    (self.out / name).unlink()
-                elif (self.out / name).is_dir():  # a zarr step volume: a directory is not replaced by a rename
-                    shutil.rmtree(self.out / name)
-                os.replace(self.stage / name, self.out / name)
+                target = self.out / name
+                if target.is_symlink():  # a step store's name that is a link: a rename cannot take it
+                    target.unlink()
+                elif target.is_dir():  # a zarr step volume: a directory is not replaced by a rename
+                    emptied = True  # from here on the previous store may be partly gone
+                    shutil.rmtree(target)
+                os.replace(self.stage / name, target)
+                done, emptied = done + 1, False
+            target = self.out
             sync_directory(self.out)
             for old in _run_names(self.out):
+                target = old
                 if old.name not in new and (old.exists() or old.is_symlink()):
                     # a step name that is a link goes as the step file it stands for; what it names is the user's
                     shutil.rmtree(old) if old.is_dir() and not old.is_symlink() else old.unlink()
-        except OSError as exc:
-            raise write_error(self.out, exc, existed=True) from None
+        except (OSError, KeyboardInterrupt) as exc:
+            line = self._commit_left(target, exc, done, emptied)
+            raise (KeyboardInterrupt if isinstance(exc, KeyboardInterrupt) else IsoflowError)(line) from None
         finally:
             shutil.rmtree(self.stage, ignore_errors=True)
         return [self.out / name for name in self.staged]
+
+    def _commit_left(self, target: Path, exc: BaseException, done: int, emptied: bool) -> str:
+        """The line of a failure (or an interrupt) while :meth:`_commit` put
+        ``done`` of the staged files in place, at ``target`` (``emptied``:
+        while the previous run's step store there was being removed)."""
+        total = len(self.staged)
+        if isinstance(exc, OSError):
+            cause = exc.strerror or str(exc) or type(exc).__name__
+            what = f"could not remove the previous run's step store ({cause})" if emptied else \
+                f"could not put it in place ({cause})" if done < total else f"could not finish the run ({cause})"
+        else:
+            what = "interrupted while putting the run's files in place"
+        if done == total:
+            return f"{target}: {what}; this run's {total} files are in place"
+        if done == 0 and not emptied:
+            return self.kept(f"{target}: {what}")
+        left = f"{done} of this run's {total} files were put in place before it, the rest were not"
+        if emptied:
+            left += f", and {target.name} of the previous run may be partly removed"
+        if self.had_files:
+            left += "; the directory holds files of both runs: run the flow again"
+        return f"{target}: {what}; {left}"
 
     def _stop_checks(self) -> None:
         if self._pool is not None:

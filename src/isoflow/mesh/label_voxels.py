@@ -146,7 +146,7 @@ def check_overlap(overlap: object) -> Overlap:
     """``overlap`` if it names a rule, else an IsoflowError naming them."""
     chosen = choice_of(overlap, OVERLAPS)  # the plain string, which the result keeps
     if chosen is None:
-        raise IsoflowError(f"voxelize: overlap must be one of {', '.join(OVERLAPS)}, got {given_text(overlap)}")
+        raise IsoflowError(f"voxelize_meshes: overlap must be one of {', '.join(OVERLAPS)}, got {given_text(overlap)}")
     return chosen  # type: ignore[return-value]
 
 
@@ -386,7 +386,8 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     >>> r.labels.shape, r.labels.dtype.name, r.voxels, r.overlaps
     ((6, 4, 4), 'uint8', (32, 64), ((1, 2, 32),))
     """
-    fill, overlap, strict = check_fill(fill), check_overlap(overlap), check_strict(strict)
+    fill, overlap = check_fill(fill, "voxelize_meshes"), check_overlap(overlap)
+    strict = check_strict(strict, "voxelize_meshes")
     split = check_switch(split, "split", "voxelize_meshes")
     check_callable(progress, "progress", "progress(done, total)")  # wrapped per mesh below, so checked here
     if pitch is None and resolution is None:

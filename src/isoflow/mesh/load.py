@@ -631,13 +631,16 @@ def _faceless_counts(data: bytes, kind: str, where: str) -> tuple[int, int]:
     return 0, 0
 
 
-def why_no_face(vertices: np.ndarray, faces: np.ndarray, rtol: float, where: str) -> str:
+def why_no_face(vertices: np.ndarray, faces: np.ndarray, rtol: float, where: str, float32: bool | None = None) -> str:
     """The line for a mesh the weld left without a face (``faces``: as
     read): every face degenerate as read, or faces that had three corners
     until the weld's tolerance (``rtol`` times the bounding box's diagonal)
     merged them, because a face far from the rest stretches the box; or
     every corner at one position as read (a float32 file far from the
-    origin, whose spacing there is coarser than the mesh).
+    origin, whose spacing there is coarser than the mesh). ``float32``:
+    whether the coordinates were given as float32 (an array in memory);
+    None for a file's, read as float64, where a position that float32
+    holds exactly may have been one.
 
     Examples
     --------
@@ -646,6 +649,8 @@ def why_no_face(vertices: np.ndarray, faces: np.ndarray, rtol: float, where: str
     'to [1e+300, 1.0, 1.0], and so no face kept three corners (a face far from the others stretches the box)'
     >>> why_no_face(np.full((3, 3), 1e9), np.array([[0, 1, 2]]), 1e-10, "m.ply").split(" (")[1]
     'float32 coordinates are 64 apart there, coarser than a mesh smaller than that); no face has area'
+    >>> why_no_face(np.zeros((3, 3)), np.array([[0, 1, 2]]), 1e-10, "mesh", float32=False)
+    'mesh: empty mesh: every corner of every face lies at one position, [0.0, 0.0, 0.0]; no face has area'
     """
     if not np.count_nonzero(~_repeats_a_corner(faces)):
         return f"{where}: empty mesh (every face is degenerate)"
@@ -655,8 +660,12 @@ def why_no_face(vertices: np.ndarray, faces: np.ndarray, rtol: float, where: str
         # far from the origin makes of any mesh smaller than its spacing there
         at = [float(f"{x:.6g}") for x in used[0]]
         spacing = float(np.spacing(np.float32(np.abs(used[0]).max())))
+        # float32's spacing explains a collapse only where the corners may have been float32 and the spacing is
+        # a normal number's: at the origin (1.4e-45 apart) the corners are the same point as given
+        was32 = np.array_equal(used[0], used[0].astype(np.float32)) if float32 is None else float32
+        far = np.abs(used[0]).max() >= np.finfo(np.float32).tiny
         coarse = (f" (float32 coordinates are {spacing:g} apart there, coarser than a mesh smaller than that)"
-                  if np.array_equal(used[0], used[0].astype(np.float32)) else "")
+                  if was32 and far else "")
         return f"{where}: empty mesh: every corner of every face lies at one position, {at}{coarse}; no face has area"
     lo, hi = ([float(f"{x:.3g}") for x in p] for p in (used.min(axis=0), used.max(axis=0)))
     return (f"{where}: empty mesh: the weld makes one point of positions closer than {rtol:g} of the bounding "
@@ -743,7 +752,7 @@ def mesh_input(mesh: MeshInput, *, merge_rtol: float = MERGE_RTOL,
     rtol = weld_tolerance(merge_rtol)
     welded, kept = weld(v, f, rtol, where="mesh", stats=stats)
     if len(kept) == 0:
-        raise IsoflowError(why_no_face(v, f, rtol, "mesh"))
+        raise IsoflowError(why_no_face(v, f, rtol, "mesh", float32=np.asarray(vertices).dtype == np.float32))
     return "mesh", welded, kept
 
 

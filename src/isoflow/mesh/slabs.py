@@ -232,7 +232,7 @@ def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: floa
     from .fills import check_fill, check_strict
     from .voxelize import Solid, plan_voxels, say_note, tell_rule, voxelization
 
-    fill, strict = check_fill(fill), check_strict(strict)
+    fill, strict = check_fill(fill, "voxelize_to_zarr"), check_strict(strict, "voxelize_to_zarr")
     check_callable(progress, "progress", "progress(done, total)")
     path = check_path(path, "path", "voxelize_to_zarr")
     if chunks is not None:
