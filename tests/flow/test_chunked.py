@@ -359,7 +359,7 @@ def test_command_warns_that_chunks_never_written_count_as_the_object(tmp_path):
     assert np.count_nonzero(read) == 1000 - 64
     lines = {}
     for name, extra in (("memory", []), ("blocks", ["--out", str(tmp_path / "run"), "--volumes", ".zarr"])):
-        run = subprocess.run([sys.executable, "-m", "isoflow", "flow", str(store), "--json", *extra],
+        run = subprocess.run([sys.executable, "-m", "isoflow", "flow", str(store), "--json", "--steps", "1", *extra],
                              capture_output=True, text=True, timeout=300)
         assert run.returncode == 0, run.stderr
         assert [s["voxels"] for s in json.loads(run.stdout)["steps"]][0] == np.count_nonzero(read)
