@@ -1063,7 +1063,9 @@ def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, 
     64
     """
     details = check_switch(details, "details", "voxelize")
-    check_fill(fill, "voxelize_mesh"), check_strict(strict, "voxelize_mesh")  # named as the function called
+    # checked here too, so that a refusal names the function called
+    check_fill(fill, "voxelize_mesh")
+    check_strict(strict, "voxelize_mesh")
     if faces is None:
         # a Manifold goes to mesh_arrays, which names it: it has no faces, and "faces are missing" misled
         if not (isinstance(vertices, tuple) or hasattr(vertices, "faces") or is_scene(vertices) or is_manifold(vertices)):
@@ -1134,7 +1136,8 @@ def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolu
                                        if isinstance(path, tuple) or hasattr(path, "vertices") else "")
     path = check_path(path, "path", "voxelize_file", hint=in_memory)
     # before the file is read (voxelize checks the others), named as the function called
-    check_fill(fill, "voxelize_file"), check_strict(strict, "voxelize_file")
+    check_fill(fill, "voxelize_file")
+    check_strict(strict, "voxelize_file")
     details = check_switch(details, "details", "voxelize")
     v, f = load_mesh(path)
     try:
