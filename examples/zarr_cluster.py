@@ -16,6 +16,9 @@ Because this sample is small, the script also loads the volume and checks
 that the report equals the in-memory one in every field, the doubled
 edges across block faces included. Prints both and writes
 ``OUT/report.json`` and a slice with the block faces (``OUT/blocks.png``).
+The workers' notes (on numba's empty cache, that they compile isoflow's
+passes, for minutes) are asked for every second and printed once on
+stderr, as ``zarr_cluster.py: note: ...``.
 Needs ``pip install 'isoflow[dask]'``.
 
 .. code-block:: bash
@@ -25,7 +28,10 @@ Needs ``pip install 'isoflow[dask]'``.
 
 import json
 import logging
+import logging.handlers
 import math
+import threading
+from contextlib import contextmanager
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -68,12 +74,65 @@ def cluster_classes():
     return Client, LocalCluster
 
 
+NOTES = "isoflow-notes"  # the name of the handler that keeps a worker's notes
+
+
+def keep_notes() -> None:
+    """In a worker process: keep what isoflow logs at level INFO (its
+    notes) in a buffer that :func:`take_notes` empties. dask's log
+    forwarding (``Client.forward_logging``) only pushes a record to the
+    clients subscribed when it reaches the scheduler, and under load the
+    client's subscription may come later: the note was lost."""
+    log = logging.getLogger("isoflow")
+    log.setLevel(logging.INFO)
+    if not any(h.get_name() == NOTES for h in log.handlers):
+        handler = logging.handlers.BufferingHandler(capacity=1000)
+        handler.set_name(NOTES)
+        log.addHandler(handler)
+
+
+def take_notes() -> list[str]:
+    """In a worker process: the notes kept since the last call (none in a
+    worker started after :func:`keep_notes` ran, one the nanny restarted)."""
+    handler = next((h for h in logging.getLogger("isoflow").handlers if h.get_name() == NOTES), None)
+    if handler is None:
+        return []
+    with handler.lock:
+        notes = [record.getMessage() for record in handler.buffer]
+        handler.buffer.clear()
+    return notes
+
+
 def show_worker_notes(client):
-    """isoflow's notes from the worker processes, printed here as this
-    process's own: on numba's empty cache each worker compiles the
-    voxeliser's passes for minutes, which only its note explains."""
-    client.run(lambda: logging.getLogger("isoflow").setLevel(logging.INFO))
-    client.forward_logging("isoflow", level=logging.INFO)
+    """isoflow's notes from the worker processes, logged here as this
+    process's own (and so printed once for all workers, as
+    ``zarr_cluster.py: note: ...``)."""
+    for notes in client.run(take_notes).values():
+        for note in notes:
+            logging.getLogger("isoflow").info(note)
+
+
+@contextmanager
+def worker_notes(client, every=1.0):
+    """Show the workers' notes while isoflow's calls run: on numba's empty
+    cache each worker compiles the voxeliser's passes for minutes, which
+    only its note explains. Asked for every ``every`` seconds, and once
+    more at the end, so that none is missed."""
+    client.run(keep_notes)
+    done = threading.Event()
+
+    def ask():
+        while not done.wait(every):
+            show_worker_notes(client)
+
+    asking = threading.Thread(target=ask, daemon=True)
+    asking.start()
+    try:
+        yield
+    finally:
+        done.set()
+        asking.join()
+        show_worker_notes(client)
 
 
 def main():
@@ -83,10 +142,10 @@ def main():
 
     with LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=":0") as cluster, \
             Client(cluster) as client:
-        show_worker_notes(client)
-        written = isoflow.voxelize_to_zarr(args.mesh, store, resolution=args.resolution, chunks=CHUNKS,
-                                           scheduler=client.get, force=args.force)
-        chunked = isoflow.analyze_zarr(store, connectivity=6, scheduler=client.get)
+        with worker_notes(client):
+            written = isoflow.voxelize_to_zarr(args.mesh, store, resolution=args.resolution, chunks=CHUNKS,
+                                               scheduler=client.get, force=args.force)
+            chunked = isoflow.analyze_zarr(store, connectivity=6, scheduler=client.get)
     solid = isoflow.read_volume(store)  # placed as the store says, as analyze_zarr places it
     volume = solid.volume
     in_memory = isoflow.analyze(solid, connectivity=6)
