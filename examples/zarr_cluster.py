@@ -82,7 +82,7 @@ def keep_notes() -> None:
     notes) in a buffer that :func:`take_notes` empties. dask's log
     forwarding (``Client.forward_logging``) only pushes a record to the
     clients subscribed when it reaches the scheduler, and under load the
-    client's subscription may come later: the note was lost."""
+    client's subscription may come later, and the note is then lost."""
     log = logging.getLogger("isoflow")
     log.setLevel(logging.INFO)
     if not any(h.get_name() == NOTES for h in log.handlers):

@@ -53,7 +53,7 @@ def _render_planar_shapes(plt, frames, box, path: Path) -> Path:
     cols = min(3, len(frames))
     rows = -(-len(frames) // cols)
     # constrained layout spaces the rows for the titles and tick labels of panels of equal aspect as they
-    # are drawn; tight_layout left a row's titles across the x tick labels of the row above
+    # are drawn; tight_layout, which lays out the panels as boxes, lets a row's titles cross the x tick labels above
     fig = plt.figure(figsize=(3.2 * cols, 3.2 * rows), dpi=100, layout="constrained")
     pad = frames[0][0].spacing
     for k, (state, rec) in enumerate(frames):
