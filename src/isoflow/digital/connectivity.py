@@ -43,7 +43,6 @@ def check_connectivity(ndim: int, connectivity: int | np.integer) -> int:
                            f"(use {allowed})")
     if whole not in VALID.get(ndim, ()):
         raise IsoflowError(f"connectivity {given_text(connectivity)} is not valid in {ndim}D (use {allowed})")
-    # a Python int, whatever was given: the value returned is what reports and JSON show
     return whole
 
 

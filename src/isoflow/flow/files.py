@@ -37,6 +37,7 @@ from ..mesh.outputs import (
     interrupted_by_signal,
     make_output_dir,
     remove_abandoned,
+    remove_entry,
     sync_directory,
     sync_file,
     temp_sibling,
@@ -128,11 +129,13 @@ def replaced_by_run(directory, path) -> bool:
     Examples
     --------
     >>> import tempfile
-    >>> run = Path(tempfile.mkdtemp())
+    >>> base = Path(tempfile.mkdtemp())
+    >>> run = base / "run"
+    >>> run.mkdir()
     >>> (run / "step_002.npy").write_bytes(b"")
     0
-    >>> (run.parent / f"{run.name}.npy").symlink_to(run / "step_002.npy")
-    >>> replaced_by_run(run, run / "step_002.npy"), replaced_by_run(run, run.parent / f"{run.name}.npy")
+    >>> (base / "input.npy").symlink_to(run / "step_002.npy")
+    >>> replaced_by_run(run, run / "step_002.npy"), replaced_by_run(run, base / "input.npy")
     (True, True)
     """
     out, path = Path(directory), Path(path)
@@ -550,7 +553,7 @@ class FlowWriter:
                 target = old
                 if old.name not in new and (old.exists() or old.is_symlink()):
                     # a step name that is a link goes as the step file it stands for; what it names is the user's
-                    shutil.rmtree(old) if old.is_dir() and not old.is_symlink() else old.unlink()
+                    remove_entry(old)
         except (OSError, KeyboardInterrupt) as exc:
             line = self._commit_left(target, exc, done, emptied)
             raise (KeyboardInterrupt if isinstance(exc, KeyboardInterrupt) else IsoflowError)(line) from None

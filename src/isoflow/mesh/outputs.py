@@ -432,6 +432,30 @@ SIGNALS: list[int] = []
 MADE: set[Path] | None = None
 
 
+def remove_entry(path: Path) -> None:
+    """Remove ``path`` from its directory: a directory with what is in it,
+    a file or a symbolic link by itself (what a link leads to is kept,
+    even a directory: it is someone else's).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The entry; OSError (FileNotFoundError too) as removing it raises.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> base = Path(tempfile.mkdtemp())
+    >>> (base / "store" / "c").mkdir(parents=True)
+    >>> (base / "link").symlink_to(base / "store")
+    >>> remove_entry(base / "link"), (base / "store" / "c").is_dir()
+    (None, True)
+    >>> remove_entry(base / "store"), sorted(p.name for p in base.iterdir())
+    (None, [])
+    """
+    shutil.rmtree(path) if path.is_dir() and not path.is_symlink() else path.unlink()
+
+
 def remove_temporaries_left() -> list[Path]:
     """Remove the temporaries of :data:`MADE` that still exist (a file,
     or a directory with what is in it) and stop recording them. Returns
@@ -451,7 +475,7 @@ def remove_temporaries_left() -> list[Path]:
     removed = []
     for tmp in sorted(made):
         try:
-            shutil.rmtree(tmp) if tmp.is_dir() and not tmp.is_symlink() else tmp.unlink()
+            remove_entry(tmp)
         except FileNotFoundError:  # renamed into place, or removed by its writer
             continue
         except OSError:
