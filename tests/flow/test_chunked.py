@@ -386,6 +386,32 @@ def test_force_removes_a_linked_step_store_not_the_store_it_names(tmp_path):
     assert {str(f.relative_to(mine)): f.read_bytes() for f in sorted(mine.rglob("*")) if f.is_file()} == kept
 
 
+def test_force_removes_a_file_named_as_a_step_store(tmp_path, capsys):
+    """A plain file named ``step_000.zarr`` in the directory:
+    ``flow_chunked(..., force=True)`` ended in a NotADirectoryError
+    traceback (rmtree of a file), and the command with ``--force`` refused
+    the run ("could not put it in place (Not a directory)"). The file goes
+    as an earlier run's store does; without force it is named."""
+    v = np.zeros((5, 5, 5), bool)
+    v[1:4, 1:4, 1:4] = True
+    plain_store(tmp_path / "in.zarr", v, (2, 3, 5))
+    for how in ("python", "command"):
+        out = tmp_path / how
+        out.mkdir()
+        (out / "step_000.zarr").write_text("not a store\n")
+        if how == "python":
+            with pytest.raises(IsoflowError, match=r"earlier run \(step_000\.zarr\)"):
+                flow_chunked(tmp_path / "in.zarr", out, steps=1)
+            assert (out / "step_000.zarr").read_text() == "not a store\n"
+            flow_chunked(tmp_path / "in.zarr", out, steps=1, force=True)
+        else:
+            assert main(["flow", str(tmp_path / "in.zarr"), "--out", str(out), "--volumes", ".zarr", "--steps", "1",
+                         "--force", "-q"]) == 0, capsys.readouterr().err
+        assert (out / "step_000.zarr").is_dir()
+        # step 0 is the input, cropped: its voxels as numpy counts them
+        assert np.count_nonzero(zarr.open_group(str(out / "step_000.zarr"), mode="r")["0"][...]) == v.sum()
+
+
 def test_command_names_a_damaged_chunk_in_one_line(tmp_path, capsys):
     """A chunk that does not decode (zarr's codec raises) ended the flow
     block by block in a traceback, exit status 1; it is one line naming the

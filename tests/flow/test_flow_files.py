@@ -751,6 +751,86 @@ def test_an_interrupt_while_the_flow_computes_names_the_directory(tmp_path, caps
     assert {p.name: p.read_bytes() for p in (tmp_path / "o").iterdir() if p.is_file()} == before
 
 
+# (block by block the command's own handler differs; the writer's renames are the same)
+@pytest.mark.parametrize("store,where", [(False, "after finish"), (False, "as the stage goes"),
+                                         (False, "at the directory's sync"), (True, "after finish")])
+def test_an_interrupt_once_the_run_is_in_place_says_so(tmp_path, capsys, monkeypatch, store, where):
+    """Ctrl-C arriving once every file of the run was renamed into --out
+    (after the writer's finish returned, or as the emptied staging
+    directory was removed) was worded "stopped while the flow ran; the
+    previous run's files in the directory are unchanged", with the new
+    run's files in place and the previous run's gone. It now says that
+    the run is complete and its files are in place; stopped before the
+    previous run's other files were removed, it says they may be left.
+    (Into a new directory it said "nothing was written".)"""
+    import shutil
+
+    from isoflow.flow import files
+    from isoflow.mesh.outputs import TEMP_MARK
+
+    big, small = np.zeros((8, 8, 8), bool), np.zeros((8, 8, 8), bool)
+    big[1:7, 1:7, 1:7] = True  # the previous run: more steps than the new one
+    small[2:5, 2:5, 2:5] = True
+    suffix = ".zarr" if store else ".npy"
+    for name, v in (("big", big), ("small", small)):
+        isoflow.write_volume(isoflow.DigitalObject(v), tmp_path / f"{name}{suffix}") if store else \
+            np.save(tmp_path / f"{name}.npy", v)
+    extra = ["--volumes", ".zarr"] if store else ["--no-check"]
+    out, fresh = tmp_path / "o", tmp_path / "fresh"
+    if not store:  # (block by block, the one case there, into a directory of no previous run: a run less)
+        assert main(["flow", str(tmp_path / f"big{suffix}"), "--out", str(out), *extra]) == 0
+    assert main(["flow", str(tmp_path / f"small{suffix}"), "--out", str(fresh), *extra]) == 0
+    before = {p.name for p in out.iterdir()} if out.exists() else set()
+    written = {p.name for p in fresh.iterdir()}
+    assert store or before - written  # the previous run's files that the new run does not replace
+    capsys.readouterr()
+    if where == "after finish":
+        real_finish = files.FlowWriter.finish
+
+        def finish(self, *args, **kwargs):
+            real_finish(self, *args, **kwargs)  # every file in place
+            raise KeyboardInterrupt
+
+        monkeypatch.setattr(files.FlowWriter, "finish", finish)
+    elif where == "as the stage goes":
+        real_rmtree, stops = shutil.rmtree, []
+
+        def rmtree(path, *args, **kwargs):
+            if Path(path).name.startswith(f".{files.STAGE}{TEMP_MARK}") and not stops:  # the staging directory, once
+                stops.append(path)
+                raise KeyboardInterrupt
+            return real_rmtree(path, *args, **kwargs)
+
+        monkeypatch.setattr(shutil, "rmtree", rmtree)
+    else:
+        def sync(path):
+            raise KeyboardInterrupt
+
+        monkeypatch.setattr(files, "sync_directory", sync)
+    assert main(["flow", str(tmp_path / f"small{suffix}"), "--out", str(out), "--force", *extra]) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    after = {p.name for p in out.iterdir()}
+    if where == "at the directory's sync":  # before the previous run's other files were removed
+        assert after == before | written
+        assert err == [f"isoflow: interrupted: {out}: interrupted after the run's files were put in place; this "
+                       f"run's {len(written)} files are in place; some of the previous run's files may be left "
+                       "beside them"], err
+    else:
+        assert after == written
+        assert err == [f"isoflow: interrupted: {out}: stopped after the run was complete; its {len(written)} files "
+                       "are in place"], err
+    # step 0 is the new input: its voxels as numpy counts them
+    first = zarr_count(out / "step_000.zarr") if store else trimesh.load(out / "step_000.ply", process=False).volume
+    assert first == pytest.approx(np.count_nonzero(small))
+
+
+def zarr_count(path: Path) -> int:
+    """The voxels of an OME-Zarr step store, as zarr reads its first level."""
+    import zarr
+
+    return int(np.count_nonzero(zarr.open_group(str(path), mode="r")["0"][...]))
+
+
 def test_a_terminal_sees_the_bar_while_step_0_is_written_and_a_line_while_the_files_are_finished(tmp_path, monkeypatch):
     """A large object's ``flow --out`` was silent on a terminal while step
     0's surface was written (as long as a step) and while the last step

@@ -50,6 +50,7 @@ import numpy as np
 
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, check_callable, check_switch, counted
+from ..mesh.outputs import remove_entry
 from ..scale.chunks import compute, decoded_chunk_voxels, import_dask, import_zarr, never_written, unwritten_fill
 from ..scale.memory import check_fits, default_budget, sized
 from .engines import ArrayFlow
@@ -697,7 +698,9 @@ def guard_refusal(where: str, shape: tuple[int, ...]) -> str:
 def clear_earlier_run(directory: Path, force: bool) -> None:
     """Remove the ``step_*.zarr`` stores an earlier run left in
     ``directory`` where ``force``, else refuse them: a shorter run wrote
-    over the first of them and left the rest, states of another run.
+    over the first of them and left the rest, states of another run. A
+    file or a symbolic link of such a name goes by itself (what a link
+    leads to is kept).
 
     Examples
     --------
@@ -716,8 +719,8 @@ def clear_earlier_run(directory: Path, force: bool) -> None:
         raise IsoflowError(f"{directory}: holds the stores of an earlier run ({earlier[0].name}"
                            f"{f' and {len(earlier) - 1} more' if len(earlier) > 1 else ''}); give an empty directory, "
                            "or force=True to replace them")
-    for store in earlier:  # a link named as a step store goes as the store would; what it names is the user's
-        store.unlink() if store.is_symlink() else shutil.rmtree(store)
+    for store in earlier:  # a link (or a file) named as a step store goes as the store would; a link's target stays
+        remove_entry(store)
 
 
 def flow_chunked(source, directory, steps: int | None = None, connectivity: int = 6, *, max_steps: int | None = None,

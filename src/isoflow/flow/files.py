@@ -329,6 +329,7 @@ class FlowWriter:
         self._said: set[str] = set()  # warnings said already (see _named)
         self.width = step_width(last_step)
         self.staged: list[str] = []  # names written into the staging directory
+        self.in_place = False  # every staged file is moved into the directory (_commit)
         self.checks: dict[int, dict] = {}
         self.problems: list[str] = []
         self.check = check  # read every step file back with trimesh
@@ -525,8 +526,16 @@ class FlowWriter:
     def interrupted(self, exc: KeyboardInterrupt) -> KeyboardInterrupt:
         """The interrupt of a run, named: one raised while the flow computes
         a step (not while a file is written) says nothing, and the command
-        then did not say that the previous run's files are unchanged."""
-        return exc if str(exc).strip() else KeyboardInterrupt(self.kept(f"{self.out}: stopped while the flow ran"))
+        then did not say that the previous run's files are unchanged. One
+        raised once every file of this run is in place (as the staging
+        directory goes, or after :meth:`finish` returned) says so: the
+        run's files are complete, the previous run's are gone."""
+        if str(exc).strip():
+            return exc
+        if self.in_place:
+            return KeyboardInterrupt(f"{self.out}: stopped after the run was complete; its {len(self.staged)} files "
+                                     "are in place")
+        return KeyboardInterrupt(self.kept(f"{self.out}: stopped while the flow ran"))
 
     def _commit(self) -> list:
         """Move the staged files over the output directory's, then remove the
@@ -540,13 +549,14 @@ class FlowWriter:
         try:
             for name in self.staged:
                 target = self.out / name
-                if target.is_symlink():  # a step store's name that is a link: a rename cannot take it
-                    target.unlink()
-                elif target.is_dir():  # a zarr step volume: a directory is not replaced by a rename
-                    emptied = True  # from here on the previous store may be partly gone
-                    shutil.rmtree(target)
+                # a rename takes neither a link of a step store's name, nor a zarr step volume (a directory),
+                # nor a file where a store is staged: each goes first (what a link leads to is kept)
+                if target.is_symlink() or target.is_dir() or target.exists() and (self.stage / name).is_dir():
+                    emptied = target.is_dir() and not target.is_symlink()  # the previous store may be partly gone
+                    remove_entry(target)
                 os.replace(self.stage / name, target)
                 done, emptied = done + 1, False
+            self.in_place = True
             target = self.out
             sync_directory(self.out)
             for old in _run_names(self.out):
@@ -571,9 +581,11 @@ class FlowWriter:
             what = f"could not remove the previous run's step store ({cause})" if emptied else \
                 f"could not put it in place ({cause})" if done < total else f"could not finish the run ({cause})"
         else:
-            what = "interrupted while putting the run's files in place"
-        if done == total:
-            return f"{target}: {what}; this run's {total} files are in place"
+            what = "interrupted after the run's files were put in place" if done == total else \
+                "interrupted while putting the run's files in place"
+        if done == total:  # stopped as the previous run's files that this one did not replace were removed
+            left = "; some of the previous run's files may be left beside them" if self.had_files else ""
+            return f"{target}: {what}; this run's {total} files are in place{left}"
         if done == 0 and not emptied:
             return self.kept(f"{target}: {what}")
         left = f"{done} of this run's {total} files were put in place before it, the rest were not"
