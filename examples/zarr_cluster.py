@@ -106,8 +106,15 @@ def take_notes() -> list[str]:
 def show_worker_notes(client):
     """isoflow's notes from the worker processes, logged here as this
     process's own (and so printed once for all workers, as
-    ``zarr_cluster.py: note: ...``)."""
-    for notes in client.run(take_notes).values():
+    ``zarr_cluster.py: note: ...``). A worker that does not answer (one
+    that died mid-run) is left out, and a poll that fails (a client
+    closing) is skipped in silence: the notes only explain a wait, and the
+    run's own result or error is what the script reports."""
+    try:
+        replies = client.run(take_notes, on_error="ignore")
+    except Exception:  # the connection's own error, of any class (a closed client's AttributeError)
+        return
+    for notes in replies.values():
         for note in notes:
             logging.getLogger("isoflow").info(note)
 
@@ -117,7 +124,9 @@ def worker_notes(client, every=1.0):
     """Show the workers' notes while isoflow's calls run: on numba's empty
     cache each worker compiles the voxeliser's passes for minutes, which
     only its note explains. Asked for every ``every`` seconds, and once
-    more at the end, so that none is missed."""
+    more at the end, so that none is missed; a poll that fails says
+    nothing (:func:`show_worker_notes`), so the run's own error is the one
+    raised."""
     client.run(keep_notes)
     done = threading.Event()
 

@@ -175,6 +175,38 @@ def test_zarr_cluster_says_that_its_workers_compile(tmp_path):
     assert notes == [f"zarr_cluster.py: note: {COMPILE_NOTE}"], done.stderr
 
 
+def test_zarr_cluster_s_failed_note_poll_is_quiet(monkeypatch, capfd):
+    """zarr_cluster.py asks its workers for their notes every second: a
+    poll that failed (a worker dying mid-run, the client closing) printed
+    the polling thread's traceback, and the last poll's failure replaced
+    the run's own result or error. A failed poll now says nothing; the
+    run's error is the one raised. A client whose every poll fails as a
+    lost connection does stands for the cluster (none is started)."""
+    import time
+
+    monkeypatch.syspath_prepend(str(EXAMPLES))
+    import zarr_cluster
+
+    class Lost:
+        polls = 0
+
+        def run(self, function, **kwargs):
+            if function is zarr_cluster.keep_notes:  # asked once, before the run
+                return {}
+            self.polls += 1
+            raise OSError("Timed out trying to connect to tcp://127.0.0.1:1 after 30 s")
+
+    client = Lost()
+    with zarr_cluster.worker_notes(client, every=0.01):
+        time.sleep(0.2)  # polls on the thread, each failing
+    assert client.polls >= 3  # the thread's, and the last one's
+    with pytest.raises(ValueError, match="the run's own error") as raised:
+        with zarr_cluster.worker_notes(client, every=0.01):
+            raise ValueError("the run's own error")
+    assert raised.value.__context__ is None  # not raised while a poll's error was handled
+    assert capfd.readouterr().err == ""
+
+
 def test_voxelize_topology(example_run):
     out, printed = example_run("voxelize_topology")
     g = genus("torus.obj")
