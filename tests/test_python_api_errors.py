@@ -358,8 +358,8 @@ CUBE = np.pad(np.ones((3, 3, 3), bool), 1)
     (lambda s: isoflow.run_flow(CUBE, 1, guard=s), "run_flow: guard"),
     (lambda s: isoflow.run_flow(CUBE, 1, until_topology_change=s), "run_flow: until_topology_change"),
     (lambda s: isoflow.run_flow(CUBE, 1, keep_states=s), "run_flow: keep_states"),
-    (lambda s: isoflow.voxelize_mesh(_box(), resolution=4, details=s), "voxelize: details"),
-    (lambda s: isoflow.voxelize_file(isoflow.data.torus(), resolution=4, details=s), "voxelize: details"),
+    (lambda s: isoflow.voxelize_mesh(_box(), resolution=4, details=s), "voxelize_mesh: details"),
+    (lambda s: isoflow.voxelize_file(isoflow.data.torus(), resolution=4, details=s), "voxelize_file: details"),
     (lambda s: isoflow.voxelize_meshes([_box()], resolution=4, split=s), "voxelize_meshes: split"),
     (lambda s: isoflow.verify_genus(_box(), resolutions=(4,), step=s), "verify_genus: step"),
 ])
@@ -400,22 +400,70 @@ def test_a_bad_fill_or_strict_names_the_function_called_before_a_file_is_written
     assert not (tmp_path / "v.zarr").exists()
 
 
+VOXELIZING_ANY_GRID = [
+    ("voxelize_to_zarr", lambda tmp, **k: isoflow.voxelize_to_zarr(_box(), tmp / "v.zarr", **k)),
+    ("voxelize_file", lambda tmp, **k: isoflow.voxelize_file(tmp / "box.stl", **k)),
+    ("voxelize_meshes", lambda tmp, **k: isoflow.voxelize_meshes([_box()], **k)),
+    ("voxelize_mesh", lambda tmp, **k: isoflow.voxelize_mesh(_box(), **k)),
+]
+
+
 @pytest.mark.parametrize(("kwargs", "words"), [
-    ({"pitch": "0.5"}, "voxelize: pitch must be a positive number, got '0.5'"),
-    ({"pitch": True}, "voxelize: pitch must be a positive number, got True"),
-    ({"resolution": "4"}, "voxelize: resolution must be an integer from 1 to 2147483647, got '4'"),
+    ({"pitch": "0.5"}, "pitch must be a positive number, got '0.5'"),
+    ({"pitch": True}, "pitch must be a positive number, got True"),
+    ({"resolution": "4"}, "resolution must be an integer from 1 to 2147483647, got '4'"),
 ])
-@pytest.mark.parametrize("voxelize", [
-    lambda **k: isoflow.voxelize_mesh(_box(), **k),
-    lambda **k: isoflow.voxelize_meshes([_box()], **k),
-])
-def test_a_pitch_or_resolution_that_is_no_number_is_refused_naming_it(voxelize, kwargs, words):
+@pytest.mark.parametrize(("name", "voxelize"), VOXELIZING_ANY_GRID)
+def test_a_pitch_or_resolution_that_is_no_number_is_refused_naming_it(name, voxelize, kwargs, words, tmp_path):
     # pitch="0.5" was read as the number it spells (and True as 1)
-    pytest.importorskip("trimesh")
+    pytest.importorskip("zarr")
+    _box().export(tmp_path / "box.stl")
     with pytest.raises(IsoflowError) as info:
-        voxelize(**kwargs)
-    assert str(info.value) == words
-    assert voxelize(pitch=0.5).voxels in (8, (8,))  # the unit box at pitch 0.5: 2 x 2 x 2 voxels
+        voxelize(tmp_path, **kwargs)
+    assert str(info.value) == f"{name}: {words}"
+    # the unit box at pitch 0.5: 2 x 2 x 2 voxels
+    assert voxelize(tmp_path, pitch=0.5).voxels in (8, (8,))
+
+
+@pytest.mark.parametrize(("kwargs", "words"), [
+    ({"pitch": 0}, "pitch must be a positive finite number, got 0"),
+    ({"pitch": -1}, "pitch must be a positive finite number, got -1"),
+    ({"pitch": float("nan")}, "pitch must be a positive finite number, got nan"),
+    ({"pitch": [0.5, 0.5]}, "pitch must be a positive number, got [0.5, 0.5]"),
+    ({"pitch": 0.5, "resolution": 4}, "give exactly one of pitch= or resolution="),
+    ({"resolution": 0}, "resolution must be an integer from 1 to 2147483647, got 0"),
+    ({"pitch": 0.5, "details": "yes"}, "details must be True or False, got 'yes'"),
+])
+@pytest.mark.parametrize(("name", "voxelize"), VOXELIZING_ANY_GRID)
+def test_a_bad_pitch_resolution_or_details_names_the_function_called(name, voxelize, kwargs, words, tmp_path):
+    # each began "voxelize:", the command's name, and voxelize_to_zarr took
+    # details="yes" for True; voxelize_meshes has no details
+    pytest.importorskip("zarr")
+    if name == "voxelize_meshes" and "details" in kwargs:
+        pytest.skip("voxelize_meshes takes no details")
+    _box().export(tmp_path / "box.stl")
+    with pytest.raises(IsoflowError) as info:
+        voxelize(tmp_path, **kwargs)
+    assert str(info.value) == f"{name}: {words}"
+    assert not (tmp_path / "v.zarr").exists()
+
+
+@pytest.mark.parametrize(("name", "voxelize"), VOXELIZING_ANY_GRID)
+def test_a_pitch_coarser_than_the_mesh_names_the_function_called(name, voxelize, tmp_path):
+    # the unit box at a pitch over 2**40 times its size
+    pytest.importorskip("zarr")
+    _box().export(tmp_path / "box.stl")
+    with pytest.raises(IsoflowError, match=re.escape(f"{name}: pitch=1e+300 is more than 2**40 times the mesh's size")):
+        voxelize(tmp_path, pitch=1e300)
+
+
+@pytest.mark.parametrize(("name", "voxelize"), VOXELIZING_ANY_GRID[1:])  # voxelize_to_zarr takes no write_bytes
+def test_a_bad_write_bytes_names_the_function_called(name, voxelize, tmp_path):
+    pytest.importorskip("trimesh")
+    _box().export(tmp_path / "box.stl")
+    words = f"{name}: write_bytes must be a number of bytes per voxel from 0 on, got -1"
+    with pytest.raises(IsoflowError, match=re.escape(words)):
+        voxelize(tmp_path, pitch=0.5, write_bytes=-1)
 
 
 @pytest.mark.parametrize("resolution", ["4", 4.5, True])
@@ -1767,11 +1815,11 @@ def test_flow_chunked_refuses_a_directory_that_is_a_file(tmp_path):
     assert (tmp_path / "out").read_bytes() == b"mine"
 
 
-@pytest.mark.parametrize("voxelize", [
-    lambda **k: isoflow.voxelize_mesh(_box(), **k),
-    lambda **k: isoflow.voxelize_meshes([_box()], **k),
+@pytest.mark.parametrize(("name", "voxelize"), [
+    ("voxelize_mesh", lambda **k: isoflow.voxelize_mesh(_box(), **k)),
+    ("voxelize_meshes", lambda **k: isoflow.voxelize_meshes([_box()], **k)),
 ])
-def test_a_pitch_is_a_real_number_as_digital_objects_pitch_is(voxelize):
+def test_a_pitch_is_a_real_number_as_digital_objects_pitch_is(name, voxelize):
     """A voxel size is a real number (``numbers.Real``), as
     ``DigitalObject(..., pitch=)`` takes one: ``Fraction(1, 2)`` is 0.5,
     ``Decimal("0.5")``, which is no ``Real``, is refused naming it (it was
@@ -1779,7 +1827,7 @@ def test_a_pitch_is_a_real_number_as_digital_objects_pitch_is(voxelize):
     pytest.importorskip("trimesh")
     with pytest.raises(IsoflowError) as info:
         voxelize(pitch=Decimal("0.5"))
-    assert str(info.value) == "voxelize: pitch must be a positive number, got Decimal('0.5')"
+    assert str(info.value) == f"{name}: pitch must be a positive number, got Decimal('0.5')"
     with pytest.raises(IsoflowError, match=re.escape("'pitch' must be a number (one, or one per axis), got Decimal('0.5')")):
         isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=Decimal("0.5"))
     # the unit box at pitch 1/2: 2 x 2 x 2 voxels
