@@ -688,7 +688,7 @@ def test_closed_surfaces_refuses_a_volume_that_is_not_binary_as_analyze_does(val
         isoflow.analyze(volume)
 
 
-@pytest.mark.parametrize("call", [isoflow.analyze, isoflow.closed_surfaces, lambda v: isoflow.boundary_mesh(v, 6)])
+@pytest.mark.parametrize("call", [isoflow.analyze, isoflow.closed_surfaces, isoflow.betti_numbers, isoflow.euler_characteristic])
 def test_a_label_image_given_for_a_mask_names_label_table(call):
     # the refusal said only "threshold it first": a label image has a
     # table of its own, as the command line's refusal says (--labels)
@@ -705,6 +705,79 @@ def test_a_label_image_given_for_a_mask_names_label_table(call):
     with pytest.raises(IsoflowError) as probability:  # fractions are no label image: half way through 0 to 2
         call(labels * 0.25)
     assert str(probability.value).endswith("threshold it first, e.g. volume > 1")
+
+
+def test_a_2d_label_image_given_for_a_mask_names_label_table_of_the_image():
+    # it offered isoflow.label_table(volume) beside "e.g. image > 0"
+    from skimage.measure import regionprops_table
+
+    labels = np.zeros((6, 5), np.int32)
+    labels[1:3, 1:4], labels[4, 2:4] = 3, 8
+    with pytest.raises(IsoflowError) as info:
+        isoflow.analyze(labels)
+    assert str(info.value).endswith("threshold it first, e.g. image > 0, or give every label its row with "
+                                    "isoflow.label_table(image)")
+    props = regionprops_table(labels, properties=("label", "area"))
+    assert isoflow.label_table(labels)["voxels"].tolist() == props["area"].tolist() == [6, 2]
+
+
+def _voxels_of_the_surface_written(mask, tmp_path):
+    import trimesh
+
+    mesh = trimesh.load(isoflow.write_surface(mask, tmp_path / "one.ply", triangulate=True), force="mesh")
+    assert mesh.is_watertight
+    return round(mesh.volume)
+
+
+def _state_voxels(flow):
+    return flow["steps"][0]["voxels"]
+
+
+# each function's remedy, run on the label's mask, and what it gives, known
+# apart from isoflow: the mask's voxels, a lattice vertex per histogram count
+ONE_LABEL_AT_A_TIME = [
+    ("DigitalObject({})", lambda m, tmp: isoflow.DigitalObject(m).voxels, lambda m: int(m.sum())),
+    ("flow_step({})", lambda m, tmp: isoflow.flow_step(m).voxels <= m.sum(), lambda m: True),
+    ("run_flow({})", lambda m, tmp: _state_voxels(isoflow.run_flow(m, 1)), lambda m: int(m.sum())),
+    ("configurations({})", lambda m, tmp: isoflow.configurations(m).shape, lambda m: tuple(n + 1 for n in m.shape)),
+    ("configuration_histogram({})", lambda m, tmp: int(isoflow.configuration_histogram(m).sum()),
+     lambda m: int(np.prod([n + 1 for n in m.shape]))),
+    ("boundary_mesh({})", lambda m, tmp: isoflow.boundary_mesh(m).euler_characteristic, lambda m: 2),  # a box: a sphere
+    ("to_manifold({})", lambda m, tmp: round(isoflow.to_manifold(m).volume()), lambda m: int(m.sum())),
+    ("write_surface({}, path)", lambda m, tmp: _voxels_of_the_surface_written(m, tmp), lambda m: int(m.sum())),
+]
+
+
+@pytest.mark.parametrize("ndim", [3, 2])
+@pytest.mark.parametrize(("call", "remedy", "known"), ONE_LABEL_AT_A_TIME)
+def test_a_label_image_given_for_a_mask_offers_the_function_called_on_one_label(call, remedy, known, ndim, tmp_path):
+    """``run_flow``, ``write_surface`` and the others that take a mask
+    offered ``isoflow.label_table(volume)`` for a label image, a table of
+    numbers, which flows nothing and writes no surface: each offers itself
+    on one label's mask, which it then takes. A function that takes no 2D
+    image offers a 2D one nothing of the kind."""
+    name = call.split("(")[0]
+    if name == "to_manifold":
+        pytest.importorskip("manifold3d")
+    if name == "write_surface":
+        pytest.importorskip("trimesh")
+    labels = np.zeros((6, 5, 4), np.int32)
+    labels[1:3, 1:4, 1:3], labels[4, 2:4, 1] = 3, 8
+    thing = "volume"
+    if ndim == 2:
+        labels, thing = labels[:, :, 1], "image"
+    function = getattr(isoflow, name)
+    with pytest.raises(IsoflowError) as info:
+        function(labels, tmp_path / "all.ply") if name == "write_surface" else function(labels)
+    message = str(info.value)
+    assert "label_table" not in message
+    takes_2d = name not in ("boundary_mesh", "to_manifold", "write_surface")
+    if ndim == 2 and not takes_2d:
+        assert "one label" not in message, message
+        return
+    assert message.endswith(f", or one label at a time, e.g. {call.format(f'{thing} == 3')}"), message
+    mask = labels == 3
+    assert remedy(mask, tmp_path) == known(mask)
 
 
 @pytest.mark.parametrize("method", ["numpy", "compiled"])

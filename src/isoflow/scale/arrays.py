@@ -21,7 +21,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 
 import numpy as np
 
@@ -333,8 +333,11 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
         # it is that value (a whole array of one value is read as its mask by the file readers, never refused)
         one = (near is not None and bool(np.isfinite(value)) and bool(np.all(values == value))
                and not bool((arr == 1).any()))
-        raise NotBinary(bare + (", or give every label its row with isoflow.label_table(volume)" if table else ""),
-                        bare, every=every, kind=kind, value=value if one else None)
+        # the test that selects one label, for the remedy a function other than analyze's kind offers
+        mask = f"{thing} == {value}" if table else None
+        raise NotBinary(bare + (f", or give every label its row with isoflow.label_table({thing})" if table else ""),
+                        bare, every=every, ndim=arr.ndim if table else None, kind=kind, value=value if one else None,
+                        mask=mask)
     return arr.astype(bool)
 
 
@@ -528,16 +531,63 @@ class NotBinary(IsoflowError):
     (:func:`value_kind`), so that a probability map is offered no label;
     ``value``: the one value other than 0 where the block read holds no
     other, a mask of it (0/255), which ``--label`` then names (``--label
-    255``), else None."""
+    255``), else None; ``mask``: where a label image in memory was given
+    (the refusal then offers :func:`~isoflow.digital.label_table.label_table`),
+    the test that selects one of its labels (``volume == 2``), which
+    :func:`one_label_at_a_time` offers instead to a function that no label
+    table stands in for, else None."""
 
     def __init__(self, message: str, bare: str | None = None, every: bool | None = True, ndim: int | None = None,
-                 kind: str = "labels", value: object = None):
+                 kind: str = "labels", value: object = None, mask: str | None = None):
         super().__init__(message)
         self.value = value
+        self.mask = mask
         self.bare = message if bare is None else bare
         self.every = every
         self.ndim = ndim
         self.kind = kind
+
+
+@contextlib.contextmanager
+def one_label_at_a_time(call: str, dims: tuple[int, ...] = (2, 3)) -> Iterator[None]:
+    """Within it, a label image refused where a mask is expected offers
+    ``call`` of one label's mask (``run_flow(volume == 2)``) where it
+    offered :func:`~isoflow.digital.label_table.label_table`, which stands
+    in for analyze and its kind only: a table of numbers is no flow, no
+    surface and no histogram. An image of a dimension the function does
+    not take is offered neither (its next refusal would be of that).
+
+    Parameters
+    ----------
+    call : str
+        The function called, ``{}`` where the mask goes:
+        ``"run_flow({})"``, ``"write_surface({}, path)"``.
+    dims : tuple of int
+        The dimensions it takes.
+
+    Yields
+    ------
+    None
+
+    Examples
+    --------
+    >>> image = np.array([[0, 1], [2, 2]], np.uint8)
+    >>> with one_label_at_a_time("flow_step({})"):
+    ...     binary(image)
+    Traceback (most recent call last):
+    ...
+    isoflow.scale.arrays.NotBinary: volume: not a binary image (2 pixels hold values other than 0 and 1, e.g. 2); \
+threshold it first, e.g. image > 0, or one label at a time, e.g. flow_step(image == 2)
+    """
+    try:
+        yield
+    except NotBinary as exc:
+        if exc.mask is None:
+            raise
+        if exc.ndim not in dims:
+            raise NotBinary(exc.bare, exc.bare, every=exc.every, ndim=exc.ndim, kind=exc.kind, value=exc.value) from None
+        raise NotBinary(f"{exc.bare}, or one label at a time, e.g. {call.format(exc.mask)}", exc.bare, every=exc.every,
+                        ndim=exc.ndim, kind=exc.kind, value=exc.value, mask=exc.mask) from None
 
 
 def as_volume(volume, where: str = "volume", canonical: bool = True, dims: tuple[int, ...] = (2, 3, 4)):
