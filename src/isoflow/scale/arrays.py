@@ -137,6 +137,55 @@ def as_array(array, where: str = "volume") -> np.ndarray:
         raise IsoflowError(f"{where}: nested sequences of uneven lengths are no array ({error})") from None
 
 
+def read_anew(array: object, where: str = "volume") -> np.ndarray | None:
+    """A dask array computed into a NumPy array made for it here, which
+    nothing else holds, so that a holder that must own its memory keeps it
+    as it is (``numpy.asarray`` may give memory the caller still holds: an
+    array that a dask task returns whole); None for anything else, and for
+    a dask array of unknown chunk sizes or whose scheduler runs its tasks
+    in other processes (which would write into copies of the array).
+
+    Parameters
+    ----------
+    array : object
+        What the caller passed.
+    where : str
+        The argument's name, for the refusal of an array beyond memory
+        (:func:`refuse_beyond_memory`).
+
+    Returns
+    -------
+    numpy.ndarray or None
+        A writeable array that owns its memory, of the dask array's shape
+        and type.
+
+    Examples
+    --------
+    >>> import dask.array as da
+    >>> read = read_anew(da.ones((4, 4), dtype=bool, chunks=2))
+    >>> read.dtype.name, int(read.sum()), read.flags.owndata, read_anew(np.ones(3)) is None
+    ('bool', 16, True, True)
+    """
+    if type(array).__module__.split(".")[0] != "dask" or not hasattr(array, "store"):
+        return None
+    shape = tuple(array.shape)  # type: ignore[attr-defined]
+    if any(not np.isfinite(s) for s in shape):
+        return None
+    import dask.local
+    import dask.threaded
+    from dask.base import get_scheduler
+
+    scheduler = get_scheduler(collections=[array])
+    if scheduler not in (dask.threaded.get, dask.local.get_sync):
+        return None
+    refuse_beyond_memory(array, where)
+    read = np.empty(shape, dtype=array.dtype)  # type: ignore[attr-defined]
+    # each chunk is written into its place as it is computed: no second
+    # array of the whole, as the concatenation of numpy.asarray makes
+    array.store(read, lock=False, scheduler=scheduler)  # type: ignore[attr-defined]
+    return read
+
+
 def refuse_beyond_memory(array: object, where: str = "volume") -> None:
     """Refuse, before it is read, a dask or zarr array whose voxels would
     not fit in memory (:func:`~isoflow.scale.memory.check_fits`): NumPy
