@@ -92,8 +92,8 @@ def test_whole_floats_for_counts_sizes_and_labels():
 
 
 @pytest.mark.parametrize(("call", "words"), [
-    (lambda v: isoflow.voxelize_mesh(_trimesh_box(), resolution=v), "voxelize: resolution must be an integer from 1 to "
-                                                                     "2147483647, got {}"),
+    (lambda v: isoflow.voxelize_mesh(_trimesh_box(), resolution=v), "voxelize_mesh: resolution must be an integer from 1 "
+                                                                     "to 2147483647, got {}"),
     (lambda v: isoflow.run_flow(np.ones((3, 3, 3), bool), steps=v), "steps must be an integer >= 0, got {}"),
     (lambda v: isoflow.analyze(np.ones((3, 3, 3), bool), threads=v), "threads must be a positive integer, got {}"),
     (lambda v: isoflow.betti_numbers(_tunnel(), chi=v), "chi must be an integer, got {}"),

@@ -358,8 +358,8 @@ CUBE = np.pad(np.ones((3, 3, 3), bool), 1)
     (lambda s: isoflow.run_flow(CUBE, 1, guard=s), "run_flow: guard"),
     (lambda s: isoflow.run_flow(CUBE, 1, until_topology_change=s), "run_flow: until_topology_change"),
     (lambda s: isoflow.run_flow(CUBE, 1, keep_states=s), "run_flow: keep_states"),
-    (lambda s: isoflow.voxelize_mesh(_box(), resolution=4, details=s), "voxelize: details"),
-    (lambda s: isoflow.voxelize_file(isoflow.data.torus(), resolution=4, details=s), "voxelize: details"),
+    (lambda s: isoflow.voxelize_mesh(_box(), resolution=4, details=s), "voxelize_mesh: details"),
+    (lambda s: isoflow.voxelize_file(isoflow.data.torus(), resolution=4, details=s), "voxelize_file: details"),
     (lambda s: isoflow.voxelize_meshes([_box()], resolution=4, split=s), "voxelize_meshes: split"),
     (lambda s: isoflow.verify_genus(_box(), resolutions=(4,), step=s), "verify_genus: step"),
 ])
@@ -400,22 +400,70 @@ def test_a_bad_fill_or_strict_names_the_function_called_before_a_file_is_written
     assert not (tmp_path / "v.zarr").exists()
 
 
+VOXELIZING_ANY_GRID = [
+    ("voxelize_to_zarr", lambda tmp, **k: isoflow.voxelize_to_zarr(_box(), tmp / "v.zarr", **k)),
+    ("voxelize_file", lambda tmp, **k: isoflow.voxelize_file(tmp / "box.stl", **k)),
+    ("voxelize_meshes", lambda tmp, **k: isoflow.voxelize_meshes([_box()], **k)),
+    ("voxelize_mesh", lambda tmp, **k: isoflow.voxelize_mesh(_box(), **k)),
+]
+
+
 @pytest.mark.parametrize(("kwargs", "words"), [
-    ({"pitch": "0.5"}, "voxelize: pitch must be a positive number, got '0.5'"),
-    ({"pitch": True}, "voxelize: pitch must be a positive number, got True"),
-    ({"resolution": "4"}, "voxelize: resolution must be an integer from 1 to 2147483647, got '4'"),
+    ({"pitch": "0.5"}, "pitch must be a positive number, got '0.5'"),
+    ({"pitch": True}, "pitch must be a positive number, got True"),
+    ({"resolution": "4"}, "resolution must be an integer from 1 to 2147483647, got '4'"),
 ])
-@pytest.mark.parametrize("voxelize", [
-    lambda **k: isoflow.voxelize_mesh(_box(), **k),
-    lambda **k: isoflow.voxelize_meshes([_box()], **k),
-])
-def test_a_pitch_or_resolution_that_is_no_number_is_refused_naming_it(voxelize, kwargs, words):
+@pytest.mark.parametrize(("name", "voxelize"), VOXELIZING_ANY_GRID)
+def test_a_pitch_or_resolution_that_is_no_number_is_refused_naming_it(name, voxelize, kwargs, words, tmp_path):
     # pitch="0.5" was read as the number it spells (and True as 1)
-    pytest.importorskip("trimesh")
+    pytest.importorskip("zarr")
+    _box().export(tmp_path / "box.stl")
     with pytest.raises(IsoflowError) as info:
-        voxelize(**kwargs)
-    assert str(info.value) == words
-    assert voxelize(pitch=0.5).voxels in (8, (8,))  # the unit box at pitch 0.5: 2 x 2 x 2 voxels
+        voxelize(tmp_path, **kwargs)
+    assert str(info.value) == f"{name}: {words}"
+    # the unit box at pitch 0.5: 2 x 2 x 2 voxels
+    assert voxelize(tmp_path, pitch=0.5).voxels in (8, (8,))
+
+
+@pytest.mark.parametrize(("kwargs", "words"), [
+    ({"pitch": 0}, "pitch must be a positive finite number, got 0"),
+    ({"pitch": -1}, "pitch must be a positive finite number, got -1"),
+    ({"pitch": float("nan")}, "pitch must be a positive finite number, got nan"),
+    ({"pitch": [0.5, 0.5]}, "pitch must be a positive number, got [0.5, 0.5]"),
+    ({"pitch": 0.5, "resolution": 4}, "give exactly one of pitch= or resolution="),
+    ({"resolution": 0}, "resolution must be an integer from 1 to 2147483647, got 0"),
+    ({"pitch": 0.5, "details": "yes"}, "details must be True or False, got 'yes'"),
+])
+@pytest.mark.parametrize(("name", "voxelize"), VOXELIZING_ANY_GRID)
+def test_a_bad_pitch_resolution_or_details_names_the_function_called(name, voxelize, kwargs, words, tmp_path):
+    # each began "voxelize:", the command's name, and voxelize_to_zarr took
+    # details="yes" for True; voxelize_meshes has no details
+    pytest.importorskip("zarr")
+    if name == "voxelize_meshes" and "details" in kwargs:
+        pytest.skip("voxelize_meshes takes no details")
+    _box().export(tmp_path / "box.stl")
+    with pytest.raises(IsoflowError) as info:
+        voxelize(tmp_path, **kwargs)
+    assert str(info.value) == f"{name}: {words}"
+    assert not (tmp_path / "v.zarr").exists()
+
+
+@pytest.mark.parametrize(("name", "voxelize"), VOXELIZING_ANY_GRID)
+def test_a_pitch_coarser_than_the_mesh_names_the_function_called(name, voxelize, tmp_path):
+    # the unit box at a pitch over 2**40 times its size
+    pytest.importorskip("zarr")
+    _box().export(tmp_path / "box.stl")
+    with pytest.raises(IsoflowError, match=re.escape(f"{name}: pitch=1e+300 is more than 2**40 times the mesh's size")):
+        voxelize(tmp_path, pitch=1e300)
+
+
+@pytest.mark.parametrize(("name", "voxelize"), VOXELIZING_ANY_GRID[1:])  # voxelize_to_zarr takes no write_bytes
+def test_a_bad_write_bytes_names_the_function_called(name, voxelize, tmp_path):
+    pytest.importorskip("trimesh")
+    _box().export(tmp_path / "box.stl")
+    words = f"{name}: write_bytes must be a number of bytes per voxel from 0 on, got -1"
+    with pytest.raises(IsoflowError, match=re.escape(words)):
+        voxelize(tmp_path, pitch=0.5, write_bytes=-1)
 
 
 @pytest.mark.parametrize("resolution", ["4", 4.5, True])
@@ -640,7 +688,7 @@ def test_closed_surfaces_refuses_a_volume_that_is_not_binary_as_analyze_does(val
         isoflow.analyze(volume)
 
 
-@pytest.mark.parametrize("call", [isoflow.analyze, isoflow.closed_surfaces, lambda v: isoflow.boundary_mesh(v, 6)])
+@pytest.mark.parametrize("call", [isoflow.analyze, isoflow.closed_surfaces, isoflow.betti_numbers, isoflow.euler_characteristic])
 def test_a_label_image_given_for_a_mask_names_label_table(call):
     # the refusal said only "threshold it first": a label image has a
     # table of its own, as the command line's refusal says (--labels)
@@ -657,6 +705,79 @@ def test_a_label_image_given_for_a_mask_names_label_table(call):
     with pytest.raises(IsoflowError) as probability:  # fractions are no label image: half way through 0 to 2
         call(labels * 0.25)
     assert str(probability.value).endswith("threshold it first, e.g. volume > 1")
+
+
+def test_a_2d_label_image_given_for_a_mask_names_label_table_of_the_image():
+    # it offered isoflow.label_table(volume) beside "e.g. image > 0"
+    from skimage.measure import regionprops_table
+
+    labels = np.zeros((6, 5), np.int32)
+    labels[1:3, 1:4], labels[4, 2:4] = 3, 8
+    with pytest.raises(IsoflowError) as info:
+        isoflow.analyze(labels)
+    assert str(info.value).endswith("threshold it first, e.g. image > 0, or give every label its row with "
+                                    "isoflow.label_table(image)")
+    props = regionprops_table(labels, properties=("label", "area"))
+    assert isoflow.label_table(labels)["voxels"].tolist() == props["area"].tolist() == [6, 2]
+
+
+def _voxels_of_the_surface_written(mask, tmp_path):
+    import trimesh
+
+    mesh = trimesh.load(isoflow.write_surface(mask, tmp_path / "one.ply", triangulate=True), force="mesh")
+    assert mesh.is_watertight
+    return round(mesh.volume)
+
+
+def _state_voxels(flow):
+    return flow["steps"][0]["voxels"]
+
+
+# each function's remedy, run on the label's mask, and what it gives, known
+# apart from isoflow: the mask's voxels, a lattice vertex per histogram count
+ONE_LABEL_AT_A_TIME = [
+    ("DigitalObject({})", lambda m, tmp: isoflow.DigitalObject(m).voxels, lambda m: int(m.sum())),
+    ("flow_step({})", lambda m, tmp: isoflow.flow_step(m).voxels <= m.sum(), lambda m: True),
+    ("run_flow({})", lambda m, tmp: _state_voxels(isoflow.run_flow(m, 1)), lambda m: int(m.sum())),
+    ("configurations({})", lambda m, tmp: isoflow.configurations(m).shape, lambda m: tuple(n + 1 for n in m.shape)),
+    ("configuration_histogram({})", lambda m, tmp: int(isoflow.configuration_histogram(m).sum()),
+     lambda m: int(np.prod([n + 1 for n in m.shape]))),
+    ("boundary_mesh({})", lambda m, tmp: isoflow.boundary_mesh(m).euler_characteristic, lambda m: 2),  # a box: a sphere
+    ("to_manifold({})", lambda m, tmp: round(isoflow.to_manifold(m).volume()), lambda m: int(m.sum())),
+    ("write_surface({}, path)", lambda m, tmp: _voxels_of_the_surface_written(m, tmp), lambda m: int(m.sum())),
+]
+
+
+@pytest.mark.parametrize("ndim", [3, 2])
+@pytest.mark.parametrize(("call", "remedy", "known"), ONE_LABEL_AT_A_TIME)
+def test_a_label_image_given_for_a_mask_offers_the_function_called_on_one_label(call, remedy, known, ndim, tmp_path):
+    """``run_flow``, ``write_surface`` and the others that take a mask
+    offered ``isoflow.label_table(volume)`` for a label image, a table of
+    numbers, which flows nothing and writes no surface: each offers itself
+    on one label's mask, which it then takes. A function that takes no 2D
+    image offers a 2D one nothing of the kind."""
+    name = call.split("(")[0]
+    if name == "to_manifold":
+        pytest.importorskip("manifold3d")
+    if name == "write_surface":
+        pytest.importorskip("trimesh")
+    labels = np.zeros((6, 5, 4), np.int32)
+    labels[1:3, 1:4, 1:3], labels[4, 2:4, 1] = 3, 8
+    thing = "volume"
+    if ndim == 2:
+        labels, thing = labels[:, :, 1], "image"
+    function = getattr(isoflow, name)
+    with pytest.raises(IsoflowError) as info:
+        function(labels, tmp_path / "all.ply") if name == "write_surface" else function(labels)
+    message = str(info.value)
+    assert "label_table" not in message
+    takes_2d = name not in ("boundary_mesh", "to_manifold", "write_surface")
+    if ndim == 2 and not takes_2d:
+        assert "one label" not in message, message
+        return
+    assert message.endswith(f", or one label at a time, e.g. {call.format(f'{thing} == 3')}"), message
+    mask = labels == 3
+    assert remedy(mask, tmp_path) == known(mask)
 
 
 @pytest.mark.parametrize("method", ["numpy", "compiled"])
@@ -1767,11 +1888,11 @@ def test_flow_chunked_refuses_a_directory_that_is_a_file(tmp_path):
     assert (tmp_path / "out").read_bytes() == b"mine"
 
 
-@pytest.mark.parametrize("voxelize", [
-    lambda **k: isoflow.voxelize_mesh(_box(), **k),
-    lambda **k: isoflow.voxelize_meshes([_box()], **k),
+@pytest.mark.parametrize(("name", "voxelize"), [
+    ("voxelize_mesh", lambda **k: isoflow.voxelize_mesh(_box(), **k)),
+    ("voxelize_meshes", lambda **k: isoflow.voxelize_meshes([_box()], **k)),
 ])
-def test_a_pitch_is_a_real_number_as_digital_objects_pitch_is(voxelize):
+def test_a_pitch_is_a_real_number_as_digital_objects_pitch_is(name, voxelize):
     """A voxel size is a real number (``numbers.Real``), as
     ``DigitalObject(..., pitch=)`` takes one: ``Fraction(1, 2)`` is 0.5,
     ``Decimal("0.5")``, which is no ``Real``, is refused naming it (it was
@@ -1779,7 +1900,7 @@ def test_a_pitch_is_a_real_number_as_digital_objects_pitch_is(voxelize):
     pytest.importorskip("trimesh")
     with pytest.raises(IsoflowError) as info:
         voxelize(pitch=Decimal("0.5"))
-    assert str(info.value) == "voxelize: pitch must be a positive number, got Decimal('0.5')"
+    assert str(info.value) == f"{name}: pitch must be a positive number, got Decimal('0.5')"
     with pytest.raises(IsoflowError, match=re.escape("'pitch' must be a number (one, or one per axis), got Decimal('0.5')")):
         isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=Decimal("0.5"))
     # the unit box at pitch 1/2: 2 x 2 x 2 voxels

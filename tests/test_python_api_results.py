@@ -431,6 +431,58 @@ def test_an_object_answers_for_the_volume_it_was_given_after_the_owner_of_a_read
     assert np.shares_memory(isoflow.DigitalObject(kept).volume, kept)
 
 
+def _peak_bytes(make):
+    import gc
+    import tracemalloc
+
+    gc.collect()
+    tracemalloc.start()
+    try:
+        made = make()
+        return tracemalloc.get_traced_memory()[1], made
+    finally:
+        tracemalloc.stop()
+
+
+@pytest.mark.parametrize("chunks", [64, 256])
+def test_an_object_of_a_dask_array_holds_its_voxels_in_one_array(chunks):
+    """``DigitalObject`` of a dask array computed it (one array of the
+    volume) and then copied it (a second), as it copies memory a caller may
+    still write: the computed array is made for the object, which holds it
+    as it is. At most one bool volume and a few chunks at a time (dask's
+    concatenation of the chunks was a second volume too); the object
+    shares no memory with the array the dask array was made of, and keeps
+    its voxels when that array is written."""
+    da = pytest.importorskip("dask.array")
+    n = 256
+    given = np.zeros((n, n, n), bool)
+    given[10:200, 20:100, 30:250] = True
+    source = given.copy()
+    lazy = da.from_array(source, chunks=chunks)  # (made before the count: dask hashes the array)
+    isoflow.DigitalObject(lazy)  # dask's first computation keeps some memory of its own
+    peak, obj = _peak_bytes(lambda: isoflow.DigitalObject(lazy))
+    assert peak < 1.5 * given.nbytes, peak / given.nbytes
+    assert not np.shares_memory(obj.volume, source) and obj.volume.flags.writeable is False
+    source[...] = False  # the caller reuses its array
+    assert obj.voxels == 190 * 80 * 220 == np.count_nonzero(given)
+    assert np.array_equal(obj.volume, given)
+
+
+@pytest.mark.parametrize("scheduler", ["synchronous", "threads", "processes"])
+def test_an_object_of_a_dask_array_has_its_voxels_whichever_scheduler_computes_it(scheduler):
+    # one that runs its tasks in other processes writes into no array of this one: read as NumPy reads it
+    dask = pytest.importorskip("dask")
+    da = pytest.importorskip("dask.array")
+    volume = np.zeros((6, 7, 8), bool)
+    volume[1:5, 2:6, 3:7] = True
+    kept = da.from_delayed(dask.delayed(lambda: volume)(), volume.shape, bool)  # the task gives the array itself
+    with dask.config.set(scheduler=scheduler):
+        objects = [isoflow.DigitalObject(da.from_array(volume, chunks=3)), isoflow.DigitalObject(kept)]
+    volume[...] = False
+    for obj in objects:
+        assert obj.voxels == 64 and not np.shares_memory(obj.volume, volume)
+
+
 class _Image:
     """An image class that hands ``np.asarray`` its own array, as an
     xarray DataArray of a NumPy array does."""

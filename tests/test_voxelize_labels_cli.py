@@ -787,3 +787,20 @@ def test_a_grid_longer_than_nifti_holds_is_one_line_and_no_file(tmp_path, meshes
     assert done.returncode == 0, done.stderr
     data, _ = nrrd.read(str(tmp_path / "rod.nrrd"))
     assert data.shape[0] == 40000 and np.count_nonzero(data == 1) == 40000 * 2 * 2
+
+
+@pytest.mark.parametrize("kind", ["one", "several", "zarr"])
+def test_a_pitch_coarser_than_the_mesh_is_refused_naming_the_option(tmp_path, kind):
+    """The command names ``--pitch``, not a Python function nor ``pitch=``
+    (its message said ``pitch=1e+300``), for one mesh, several and a zarr
+    store, in one line, exit 2, nothing written."""
+    box = tmp_path / "box.stl"
+    trimesh.creation.box().export(box)
+    meshes = [box, box] if kind == "several" else [box]
+    out = tmp_path / ("v.zarr" if kind == "zarr" else "v.npz")
+    p = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", *map(str, meshes), "--pitch", "1e300", "-o", str(out)],
+                       capture_output=True, text=True)
+    assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr, p.stderr
+    assert "voxelize: --pitch 1e+300 is more than 2**40 times the mesh's size" in p.stderr, p.stderr
+    assert "voxelize_" not in p.stderr and "pitch=" not in p.stderr
+    assert not out.exists()

@@ -34,7 +34,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError, counted, given_text, number_text, whole_given
 from ..results import read_only, same_fields, writeable_under
-from ..scale.arrays import as_array, binary, is_masked_array
+from ..scale.arrays import as_array, binary, is_masked_array, one_label_at_a_time, read_anew
 from .frames import space_given
 from .units import unit_given
 
@@ -141,10 +141,14 @@ class DigitalObject:
                      unit: str | None = None, space: str | None = None) -> None: ...
 
     def __post_init__(self):
-        vol = binary(self.volume, "DigitalObject volume")
+        # a dask array is computed into memory made for this object, held
+        # without the copy that memory numpy.asarray gives would need
+        anew = read_anew(self.volume, "DigitalObject volume")
+        with one_label_at_a_time("DigitalObject({})"):
+            vol = binary(self.volume if anew is None else anew, "DigitalObject volume")
         if vol.ndim not in (2, 3, 4):
             raise IsoflowError(f"a digital object is 2D, 3D or 4D, got a {vol.ndim}D array")
-        object.__setattr__(self, "volume", _held(vol, self.volume))
+        object.__setattr__(self, "volume", read_only(vol) if anew is not None else _held(vol, self.volume))
         n = vol.ndim
         offset = (0,) * n if self.offset is None else _field(
             self.offset, "offset", n, integral=True, bound=MAX_COORDINATE)

@@ -37,7 +37,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from ..results import fields_repr, same_fields
-from ..scale.arrays import as_array, binary, index_dtype, refuse_object
+from ..scale.arrays import as_array, binary, index_dtype, one_label_at_a_time, refuse_object
 from ..scale.compiled import Method, use_compiled
 from .configurations import configurations, octant_bit
 from .connectivity import check_connectivity, resolve_connectivity
@@ -647,7 +647,8 @@ def boundary_mesh(volume: ArrayLike, connectivity: int | np.integer | None = 6, 
     # 2, 255 and NaN are refused as analyze refuses them, not meshed as
     # object; the bit rows read any nonzero byte of a bool array as set, so
     # only the NumPy faces need its bytes made 0/1
-    vol = binary(vol, canonical=how == "numpy")
+    with one_label_at_a_time("boundary_mesh({})", dims=(3,)):  # a label table is no mesh
+        vol = binary(vol, canonical=how == "numpy")
     if vol.size == 0:
         return _empty_mesh(connectivity)  # no voxel: no padded copy of the long axes
     if how == "compiled":

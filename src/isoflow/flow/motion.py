@@ -79,6 +79,7 @@ from ..digital.indices import (
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, whole_given
 from ..results import read_only
+from ..scale.arrays import one_label_at_a_time
 from .planar import planar_moves
 from .segments import segment_moves
 
@@ -209,7 +210,8 @@ def flow_step(obj: DigitalObject | ArrayLike, connectivity: int | np.integer | N
     >>> flow_step(ell).volume.astype(int).tolist() == flow_step(ell, 4).volume.astype(int).tolist() == [[1, 1], [1, 0]]
     True
     """
-    obj = DigitalObject.of(obj)
+    with one_label_at_a_time("flow_step({})"):  # a label table is no flow
+        obj = DigitalObject.of(obj)
     if obj.volume.size == 0:
         # no voxel, so no vertex that stays: the empty object on the other
         # lattice, without the configurations of a volume long along its other axes

@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..digital.surface import boundary_mesh
 from ..errors import IsoflowError, given_text
+from ..scale.arrays import one_label_at_a_time
 from .voxelize import say_note, voxelize
 
 if TYPE_CHECKING:
@@ -175,7 +176,8 @@ def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int | np.integer |
     """
     import manifold3d as m3
 
-    obj = DigitalObject.of(obj)
+    with one_label_at_a_time("to_manifold({})", dims=(3,)):  # a label table is no solid
+        obj = DigitalObject.of(obj)
     if obj.ndim != 3:
         raise IsoflowError(f"to_manifold needs a 3D object, got {obj.ndim}D")
     mesh = boundary_mesh(obj.volume, connectivity)

@@ -56,6 +56,7 @@ import numpy as np
 from ..digital.float64 import beyond_axes_reasons, lost_axes_reasons, placement_words
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, check_switch, given_text, warn
+from ..scale.arrays import one_label_at_a_time
 from .float32 import float32_effect, float64_corners, float64_moved
 from .outputs import atomic_write, check_output_path, output_set
 
@@ -1025,7 +1026,8 @@ def write_surface(
     check = check_switch(check, "check", str(path))
     if ascii and suffix != ".ply":
         raise IsoflowError(f"{path}: ascii=True applies to .ply output only")
-    obj = DigitalObject.of(obj)
+    with one_label_at_a_time("write_surface({}, path)", dims=(3,)):  # a label table is no surface
+        obj = DigitalObject.of(obj)
     if obj.ndim != 3:
         raise IsoflowError(f"{path}: a surface is written of a 3D object, this one is {obj.ndim}D")
     if mesh is None:

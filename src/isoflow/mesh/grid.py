@@ -47,6 +47,7 @@ refused.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable
 from numbers import Real
 
@@ -77,7 +78,89 @@ def fmt_count(n: int, sep: bool = True) -> str:
 
 
 
-def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
+def grid_refusal(caller: str, words: str) -> IsoflowError:
+    """A refusal of ``pitch=`` or ``resolution=`` that names the function
+    called (``caller``), and on the command line the ``voxelize`` command
+    and its options.
+
+    Parameters
+    ----------
+    caller : str
+        The function called, as its message begins.
+    words : str
+        What is wrong, in the Python API's words (``pitch=1e+300 ...``).
+
+    Returns
+    -------
+    IsoflowError
+        With :attr:`~isoflow.errors.IsoflowError.command_line` naming
+        ``--pitch`` and ``--resolution``.
+
+    Examples
+    --------
+    >>> e = grid_refusal("voxelize_file", "give exactly one of pitch= or resolution=")
+    >>> str(e), e.command_line
+    ('voxelize_file: give exactly one of pitch= or resolution=', 'voxelize: give exactly one of --pitch or --resolution')
+    """
+    options = re.sub(r"\b(pitch|resolution)=(\S*)", lambda m: option_words(m.group(0)).rstrip(), words)
+    return IsoflowError.worded(f"{caller}: {words}", f"voxelize: {options}")
+
+
+def check_grid_request(pitch: object, resolution: object, caller: str = "voxelize") -> tuple[float | None, int | None]:
+    """``(pitch, resolution)`` checked before any mesh is read: exactly one
+    given, a pitch a positive finite real number (or one in a one-element
+    array), a resolution a whole number from 1 to :data:`MAX_RESOLUTION`;
+    anything else refused naming ``caller``.
+
+    Parameters
+    ----------
+    pitch, resolution : object
+        As given to the function called; one of them None.
+    caller : str
+        The function called, which the refusal names.
+
+    Returns
+    -------
+    (float or None, int or None)
+        The pitch as a float, the resolution as an int.
+
+    Examples
+    --------
+    >>> check_grid_request(None, 4.0), check_grid_request([0.5], None)
+    ((None, 4), (0.5, None))
+    >>> check_grid_request(0, None, "voxelize_mesh")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: voxelize_mesh: pitch must be a positive finite number, got 0
+    """
+    if (pitch is None) == (resolution is None):
+        raise grid_refusal(caller, "give exactly one of pitch= or resolution=")
+    if resolution is not None:
+        whole = whole_given(resolution)
+        if whole is None or not 1 <= whole <= MAX_RESOLUTION:
+            raise grid_refusal(caller, f"resolution must be an integer from 1 to {MAX_RESOLUTION}, "
+                                       f"got {given_text(resolution)}")
+        return None, whole
+    # float() reads "0.5" and True as numbers: a pitch given as text or a bool is refused
+    # by name, as a resolution is, not taken for the number it spells
+    if isinstance(pitch, (np.ndarray, list, tuple)) and np.size(pitch) == 1 and np.ndim(pitch) == 1:
+        # one number in a one-element array, as DigitalObject takes a pitch (float() refuses it)
+        (pitch,) = pitch
+    pitch = scalar_given(pitch)
+    # a voxel size is a real number, as DigitalObject's pitch: float() also read
+    # Decimal("0.5"), which DigitalObject and every other number argument refuse
+    if isinstance(pitch, (str, bytes, bool, np.bool_)) or not isinstance(pitch, Real):
+        raise grid_refusal(caller, f"pitch must be a positive number, got {given_text(pitch)}")
+    try:
+        number = float(pitch)
+    except (TypeError, ValueError, OverflowError):
+        raise grid_refusal(caller, f"pitch must be a positive number, got {given_text(pitch)}") from None
+    if not (math.isfinite(number) and number > 0):
+        raise grid_refusal(caller, f"pitch must be a positive finite number, got {number_text(pitch)}")
+    return number, None
+
+
+def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution, caller: str = "voxelize"):
     """Pitch, origin and shape of the grid (see the module docstring), and the
     scaled frame the arithmetic runs in.
 
@@ -99,8 +182,7 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
     (whose edge-function products would underflow to 0 or overflow) gives
     the voxels of the unscaled mesh up to the rounding of the scaling itself.
     """
-    if (pitch is None) == (resolution is None):
-        raise IsoflowError("voxelize: give exactly one of pitch= or resolution=")
+    pitch, res = check_grid_request(pitch, resolution, caller)
     lo, hi, ext = mesh_bbox(v, f, "voxelize")
     longest = float(ext.max())
     if not longest > 0:
@@ -109,39 +191,16 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
     shift = local_shift(lo, hi, e)
     lo_s, hi_s = np.ldexp(lo - shift, -e), np.ldexp(hi - shift, -e)
     ext_s = np.ldexp(ext, -e)
-    if resolution is not None:
-        whole = whole_given(resolution)
-        if whole is None or not 1 <= whole <= MAX_RESOLUTION:
-            raise IsoflowError(
-                f"voxelize: resolution must be an integer from 1 to {MAX_RESOLUTION}, "
-                f"got {given_text(resolution)}")
-        res = whole
+    if res is not None:
         pitch_s = float(ext_s.max()) / res
         pitch = math.ldexp(pitch_s, e)
         what = f"resolution={res}"
         cells = ext_s / pitch_s
     else:
-        # float() reads "0.5" and True as numbers: a pitch given as text or a bool is refused
-        # by name, as a resolution is, not taken for the number it spells
-        if isinstance(pitch, (np.ndarray, list, tuple)) and np.size(pitch) == 1 and np.ndim(pitch) == 1:
-            # one number in a one-element array, as DigitalObject takes a pitch (float() refuses it)
-            (pitch,) = pitch
-        pitch = scalar_given(pitch)
-        # a voxel size is a real number, as DigitalObject's pitch: float() also read
-        # Decimal("0.5"), which DigitalObject and every other number argument refuse
-        if isinstance(pitch, (str, bytes, bool, np.bool_)) or not isinstance(pitch, Real):
-            raise IsoflowError(f"voxelize: pitch must be a positive number, got {given_text(pitch)}")
-        try:
-            given, pitch = pitch, float(pitch)
-        except (TypeError, ValueError, OverflowError):
-            raise IsoflowError(f"voxelize: pitch must be a positive number, got {given_text(pitch)}") from None
-        if not (math.isfinite(pitch) and pitch > 0):
-            raise IsoflowError(f"voxelize: pitch must be a positive finite number, got {number_text(given)}")
+        assert pitch is not None
         if pitch > _MAX_PITCH_RATIO * longest:
-            raise IsoflowError(
-                f"voxelize: pitch={given_text(pitch)} is more than 2**40 times the mesh's size (longest "
-                f"bounding-box side {longest:.6g}): the whole mesh would lie inside one voxel")
-        res = None
+            raise grid_refusal(caller, f"pitch={given_text(pitch)} is more than 2**40 times the mesh's size (longest "
+                                       f"bounding-box side {longest:.6g}): the whole mesh would lie inside one voxel")
         pitch_s = math.ldexp(pitch, -e)  # may underflow: then the grid is refused as too big
         what = f"pitch={pitch!r}"
         with np.errstate(over="ignore"):

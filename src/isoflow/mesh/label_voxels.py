@@ -41,7 +41,16 @@ from ..results import Result
 from ..scale import memory
 from .bodies import Body, mesh_bodies
 from .fills import Fill, check_fill, check_strict
-from .grid import GridTooLarge, check_placement, finest_fit, grid_fits, grid_need, grid_words, voxel_grid
+from .grid import (
+    GridTooLarge,
+    check_grid_request,
+    check_placement,
+    finest_fit,
+    grid_fits,
+    grid_need,
+    grid_words,
+    voxel_grid,
+)
 from .load import mesh_bbox
 from .mesh_units import common_unit
 from .voxelize import PROGRESS_UNITS, check_write_bytes, tell_rule, voxelize
@@ -169,11 +178,12 @@ def union_corners(bodies: list[Body]) -> tuple[np.ndarray, np.ndarray]:
     return corners, np.repeat(np.arange(len(corners)), 3).reshape(-1, 3)
 
 
-def union_grid(bodies: list[Body], pitch, resolution):
+def union_grid(bodies: list[Body], pitch, resolution, caller: str = "voxelize_meshes"):
     """``(pitch, origin, shape, what)`` of the grid :func:`voxel_grid` lays
-    over the union of the bodies' bounding boxes (:func:`union_corners`)."""
+    over the union of the bodies' bounding boxes (:func:`union_corners`),
+    a refusal of ``pitch`` naming ``caller``."""
     corners, used = union_corners(bodies)
-    pitch, origin, shape, what, _ = voxel_grid(corners, used, pitch, resolution)
+    pitch, origin, shape, what, _ = voxel_grid(corners, used, pitch, resolution, caller)
     check_placement(corners.min(axis=0), corners.max(axis=0), pitch, what)
     return pitch, origin, shape, what
 
@@ -392,12 +402,13 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     check_callable(progress, "progress", "progress(done, total)")  # wrapped per mesh below, so checked here
     if pitch is None and resolution is None:
         resolution = 64
+    check_grid_request(pitch, resolution, "voxelize_meshes")  # before the meshes are read
     bodies = mesh_bodies(meshes, split)
     pitch, origin, shape, what = union_grid(bodies, pitch, resolution)
     dtype = label_dtype(len(bodies))
     windows = [body_window(b, origin, pitch, shape) for b in bodies]
     budget = memory.budget_of(max_bytes)
-    write_bytes = check_write_bytes(write_bytes)
+    write_bytes = check_write_bytes(write_bytes, "voxelize_meshes")
     extra = label_extra(shape, windows, dtype.itemsize, write_bytes)
     if not grid_fits(shape, dtype.itemsize + 0.125, extra, budget):
         raise refuse_labels(bodies, shape, what, dtype.itemsize, write_bytes, budget, extra)

@@ -39,7 +39,7 @@ from ..scale import memory
 from ..scale.chunks import compute, import_dask, import_zarr
 from .fills import Fill, Voxelization, look_up
 from .formats.omezarr import multiscales
-from .grid import GridTooLarge, finest_fit, fmt_count, grid_words
+from .grid import GridTooLarge, check_grid_request, finest_fit, fmt_count, grid_words
 from .load import load_mesh, mesh_arrays
 from .mesh_units import declared_unit
 from .outputs import atomic_path, check_writable_dir
@@ -233,6 +233,9 @@ def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: floa
     from .voxelize import Solid, plan_voxels, say_note, tell_rule, voxelization
 
     fill, strict = check_fill(fill, "voxelize_to_zarr"), check_strict(strict, "voxelize_to_zarr")
+    # details="yes" returned the pair, as True does: refused, as voxelize_mesh refuses it
+    details = check_switch(details, "details", "voxelize_to_zarr")
+    check_grid_request(pitch, resolution, "voxelize_to_zarr")  # before the mesh is read, whose name the errors below carry
     check_callable(progress, "progress", "progress(done, total)")
     path = check_path(path, "path", "voxelize_to_zarr")
     if chunks is not None:
@@ -245,7 +248,7 @@ def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: floa
     # a file names itself in its errors
     v, f = load_mesh(source) if isinstance(source, (str, os.PathLike)) else mesh_arrays(source, where)
     try:
-        v, f, shape, what, frame, origin, pitch = plan_voxels(v, f, pitch=pitch, resolution=resolution)
+        v, f, shape, what, frame, origin, pitch = plan_voxels(v, f, pitch=pitch, resolution=resolution, caller="voxelize_to_zarr")
         budget = memory.budget_of(max_bytes)
         solid = None
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 
 import numpy as np
 
@@ -135,6 +135,55 @@ def as_array(array, where: str = "volume") -> np.ndarray:
         if "inhomogeneous" not in str(error):  # another failure of the object's own conversion: as it is
             raise
         raise IsoflowError(f"{where}: nested sequences of uneven lengths are no array ({error})") from None
+
+
+def read_anew(array: object, where: str = "volume") -> np.ndarray | None:
+    """A dask array computed into a NumPy array made for it here, which
+    nothing else holds, so that a holder that must own its memory keeps it
+    as it is (``numpy.asarray`` may give memory the caller still holds: an
+    array that a dask task returns whole); None for anything else, and for
+    a dask array of unknown chunk sizes or whose scheduler runs its tasks
+    in other processes (which would write into copies of the array).
+
+    Parameters
+    ----------
+    array : object
+        What the caller passed.
+    where : str
+        The argument's name, for the refusal of an array beyond memory
+        (:func:`refuse_beyond_memory`).
+
+    Returns
+    -------
+    numpy.ndarray or None
+        A writeable array that owns its memory, of the dask array's shape
+        and type.
+
+    Examples
+    --------
+    >>> import dask.array as da
+    >>> read = read_anew(da.ones((4, 4), dtype=bool, chunks=2))
+    >>> read.dtype.name, int(read.sum()), read.flags.owndata, read_anew(np.ones(3)) is None
+    ('bool', 16, True, True)
+    """
+    if type(array).__module__.split(".")[0] != "dask" or not hasattr(array, "store"):
+        return None
+    shape = tuple(array.shape)  # type: ignore[attr-defined]
+    if any(not np.isfinite(s) for s in shape):
+        return None
+    import dask.local
+    import dask.threaded
+    from dask.base import get_scheduler
+
+    scheduler = get_scheduler(collections=[array])
+    if scheduler not in (dask.threaded.get, dask.local.get_sync):
+        return None
+    refuse_beyond_memory(array, where)
+    read = np.empty(shape, dtype=array.dtype)  # type: ignore[attr-defined]
+    # each chunk is written into its place as it is computed: no second
+    # array of the whole, as the concatenation of numpy.asarray makes
+    array.store(read, lock=False, scheduler=scheduler)  # type: ignore[attr-defined]
+    return read
 
 
 def refuse_beyond_memory(array: object, where: str = "volume") -> None:
@@ -333,8 +382,11 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
         # it is that value (a whole array of one value is read as its mask by the file readers, never refused)
         one = (near is not None and bool(np.isfinite(value)) and bool(np.all(values == value))
                and not bool((arr == 1).any()))
-        raise NotBinary(bare + (", or give every label its row with isoflow.label_table(volume)" if table else ""),
-                        bare, every=every, kind=kind, value=value if one else None)
+        # the test that selects one label, for the remedy a function other than analyze's kind offers
+        mask = f"{thing} == {value}" if table else None
+        raise NotBinary(bare + (f", or give every label its row with isoflow.label_table({thing})" if table else ""),
+                        bare, every=every, ndim=arr.ndim if table else None, kind=kind, value=value if one else None,
+                        mask=mask)
     return arr.astype(bool)
 
 
@@ -528,16 +580,63 @@ class NotBinary(IsoflowError):
     (:func:`value_kind`), so that a probability map is offered no label;
     ``value``: the one value other than 0 where the block read holds no
     other, a mask of it (0/255), which ``--label`` then names (``--label
-    255``), else None."""
+    255``), else None; ``mask``: where a label image in memory was given
+    (the refusal then offers :func:`~isoflow.digital.label_table.label_table`),
+    the test that selects one of its labels (``volume == 2``), which
+    :func:`one_label_at_a_time` offers instead to a function that no label
+    table stands in for, else None."""
 
     def __init__(self, message: str, bare: str | None = None, every: bool | None = True, ndim: int | None = None,
-                 kind: str = "labels", value: object = None):
+                 kind: str = "labels", value: object = None, mask: str | None = None):
         super().__init__(message)
         self.value = value
+        self.mask = mask
         self.bare = message if bare is None else bare
         self.every = every
         self.ndim = ndim
         self.kind = kind
+
+
+@contextlib.contextmanager
+def one_label_at_a_time(call: str, dims: tuple[int, ...] = (2, 3)) -> Iterator[None]:
+    """Within it, a label image refused where a mask is expected offers
+    ``call`` of one label's mask (``run_flow(volume == 2)``) where it
+    offered :func:`~isoflow.digital.label_table.label_table`, which stands
+    in for analyze and its kind only: a table of numbers is no flow, no
+    surface and no histogram. An image of a dimension the function does
+    not take is offered neither (its next refusal would be of that).
+
+    Parameters
+    ----------
+    call : str
+        The function called, ``{}`` where the mask goes:
+        ``"run_flow({})"``, ``"write_surface({}, path)"``.
+    dims : tuple of int
+        The dimensions it takes.
+
+    Yields
+    ------
+    None
+
+    Examples
+    --------
+    >>> image = np.array([[0, 1], [2, 2]], np.uint8)
+    >>> with one_label_at_a_time("flow_step({})"):
+    ...     binary(image)
+    Traceback (most recent call last):
+    ...
+    isoflow.scale.arrays.NotBinary: volume: not a binary image (2 pixels hold values other than 0 and 1, e.g. 2); \
+threshold it first, e.g. image > 0, or one label at a time, e.g. flow_step(image == 2)
+    """
+    try:
+        yield
+    except NotBinary as exc:
+        if exc.mask is None:
+            raise
+        if exc.ndim not in dims:
+            raise NotBinary(exc.bare, exc.bare, every=exc.every, ndim=exc.ndim, kind=exc.kind, value=exc.value) from None
+        raise NotBinary(f"{exc.bare}, or one label at a time, e.g. {call.format(exc.mask)}", exc.bare, every=exc.every,
+                        ndim=exc.ndim, kind=exc.kind, value=exc.value, mask=exc.mask) from None
 
 
 def as_volume(volume, where: str = "volume", canonical: bool = True, dims: tuple[int, ...] = (2, 3, 4)):
