@@ -1375,7 +1375,8 @@ def test_an_ilastik_export_is_read_by_its_axistags(tmp_path):
     got = json.loads(done.stdout)
     with h5py.File(tmp_path / "seg.h5") as f:
         stored = f["exported_data"][()]
-    assert got["shape"] == list(stored.shape[:3]) and got["voxels"] == np.count_nonzero(stored == 2)
+    # (z, y, x) as the tags name them: read as isoflow's (x, y, z)
+    assert got["shape"] == list(stored.shape[2::-1]) and got["voxels"] == np.count_nonzero(stored == 2)
     from scipy import ndimage
 
     # a box and a voxel apart: counted in 3D (b1 and b2 of a 4D reading were not counted)
@@ -1384,6 +1385,45 @@ def test_an_ilastik_export_is_read_by_its_axistags(tmp_path):
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1, done.stderr
     assert "axis 'c' has 2 entries (axistags zyxc, shape (8, 7, 6, 2))" in lines[0], lines[0]
+
+
+def test_an_ilastik_export_is_placed_by_its_axistags_not_mirrored(tmp_path):
+    """ilastik stores (z, y, x, c) and names the axes in ``axistags``;
+    Fiji's HDF5 plug-in gives ``element_size_um`` in the same order. The
+    tagged dataset was read as stored, its z as isoflow's x: a bar along
+    x was reported along x from 2 to 6 um (its z extent) with z's voxel
+    size, and its surface written mirrored (x and z swapped). The truth is
+    h5py's array placed by the tags: the bar's voxels' corners times the
+    voxel size of their own axis."""
+    h5py = pytest.importorskip("h5py")
+    zyx = np.zeros((4, 6, 10, 1), np.uint8)
+    zyx[1:3, 1:2, 2:9, 0] = 1  # a bar along x
+    with h5py.File(tmp_path / "bar.h5", "w") as f:
+        data = f.create_dataset("exported_data", data=zyx)
+        data.attrs["axistags"] = vigra_axistags("zyxc")
+        data.attrs["element_size_um"] = [2.0, 0.5, 0.25, 1.0]
+    with h5py.File(tmp_path / "bar.h5") as f:
+        stored = f["exported_data"][()]
+        size_zyx = np.asarray(f["exported_data"].attrs["element_size_um"][:3])
+    z, y, x = np.nonzero(stored[..., 0])
+    cells = np.stack([x, y, z], axis=1)
+    size = size_zyx[::-1]
+    low, high = cells.min(0) * size, (cells.max(0) + 1) * size
+
+    def isoflow_cli(*args):
+        return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True,
+                              cwd=tmp_path)
+
+    done = isoflow_cli("info", "bar.h5", "--json")
+    assert done.returncode == 0, done.stderr
+    got = json.loads(done.stdout)
+    assert got["shape"] == [10, 6, 4] and got["unit"] == "\u00b5m"
+    assert np.allclose(got["pitch"], size) and np.allclose(got["bbox"], np.concatenate([low, high]))
+    done = isoflow_cli("surface", "bar.h5", "-o", "bar.ply")
+    assert done.returncode == 0, done.stderr
+    mesh = trimesh.load(tmp_path / "bar.ply", process=False)
+    assert np.allclose(mesh.bounds, [low, high])
+    assert np.isclose(mesh.volume, len(cells) * np.prod(size))
 
 
 def test_a_dataset_an_hdf5_external_link_names_is_read_and_listed(tmp_path):
