@@ -1852,6 +1852,38 @@ def test_a_detached_nrrd_header_whose_data_file_is_gone_names_it(tmp_path, capsy
     assert json.loads(run(capsys, "info", tmp_path / "scan.nhdr", "--json"))["voxels"] == np.count_nonzero(labels == 3)
 
 
+def test_a_detached_nrrd_header_over_several_data_files_is_refused_by_its_field(tmp_path, capsys):
+    """NRRD lets a detached header spread its data over several files
+    (``data file: LIST`` with one name a line after it, or teem's pattern
+    ``slice%03d.raw 0 7 1 2``), which pynrrd does not read: the lines
+    were "not a readable NRRD file (ValueError: not enough values to
+    unpack ...)" and "(FileNotFoundError: ... 'slice%03d.raw 0 7 1 2')",
+    and a ``type: block`` file's "negative dimensions are not allowed".
+    Each is one line naming the field and its value. A single data file
+    whose name holds a space or starts with LIST reads, its count that
+    of pynrrd's array."""
+    nrrd = pytest.importorskip("nrrd")
+    mask = np.zeros((6, 5, 4), np.uint8)
+    mask[1:4, 1:3, 1:3] = 1
+    head = "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 6 5 4\nencoding: raw\n"
+    for k in range(4):
+        (tmp_path / f"slice{k:03d}.raw").write_bytes(mask[:, :, k].tobytes(order="F"))
+    names = "".join(f"slice{k:03d}.raw\n" for k in range(4))
+    (tmp_path / "list.nhdr").write_text(head + "data file: LIST 2\n" + names)
+    (tmp_path / "pattern.nhdr").write_text(head + "data file: slice%03d.raw 0 3 1 2\n")
+    (tmp_path / "block.nrrd").write_bytes(b"NRRD0004\ntype: block\nblock size: 2\ndimension: 3\nsizes: 6 5 4\n"
+                                          b"encoding: raw\n\n" + bytes(2 * mask.size))
+    fails(capsys, "info", tmp_path / "list.nhdr", words=("list.nhdr: its field 'data file' (LIST 2)", "several files"))
+    fails(capsys, "info", tmp_path / "pattern.nhdr",
+          words=("pattern.nhdr: its field 'data file' (slice%03d.raw 0 3 1 2)", "several files"))
+    fails(capsys, "info", tmp_path / "block.nrrd", words=("block.nrrd: NRRD field 'type' is 'block'",))
+    for name in ("my scan.raw", "LISTING.raw"):
+        (tmp_path / name).write_bytes(mask.tobytes(order="F"))
+        (tmp_path / "one.nhdr").write_text(head + f"data file: {name}\n")
+        voxels = np.count_nonzero(nrrd.read(str(tmp_path / "one.nhdr"))[0])
+        assert json.loads(run(capsys, "info", tmp_path / "one.nhdr", "--json"))["voxels"] == voxels == 12
+
+
 @pytest.mark.parametrize("suffix, meshes", [("tif", 1), ("nrrd", 1), ("binvox", 1), ("nii.gz", 1), ("vox", 1),
                                             ("tif", 2), ("nrrd", 2)])
 def test_voxelize_writes_within_the_memory_budget_it_let_the_grid_in(suffix, meshes, tmp_path, capsys, monkeypatch):
