@@ -155,6 +155,40 @@ def test_a_negative_pixdim_of_a_nifti_without_forms_mirrors_its_axis(tmp_path, l
     assert "negative: that axis runs mirrored" in warned and len(warned.splitlines()) == 1
 
 
+@pytest.mark.parametrize("slope, inter", [(2.0, 0.0), (np.nan, 5.0), (0.0, 5.0), (1.0, 1.0), (1.0, -1.0)])
+def test_a_nifti_mask_is_read_with_its_header_scaling_said_where_it_moves_0(tmp_path, slope, inter):
+    """NIfTI scales the stored values, ``scl_slope * stored + scl_inter``,
+    unless scl_slope is 0 or NaN ("no scaling"). A 0/1 mask with slope 2
+    is 0/2, a mask; slope 0 or NaN leave it 0/1. Under scl_inter 1 it is
+    1/2 (refused as no mask), under -1 it is -1/0, whose object is the
+    voxels stored 0: it read so without a word. The values are nibabel's
+    (the voxel count of its scaled array where it is a mask), and a
+    scaling that moves the stored 0 is said in a warning naming
+    scl_inter and its value."""
+    import struct
+
+    mask = np.zeros((6, 5, 4), np.uint8)
+    mask[1:4, 1:4, 1:3] = 1
+    path = tmp_path / "mask.nii"
+    nib.save(nib.Nifti1Image(mask, np.eye(4)), path)
+    header = bytearray(path.read_bytes())
+    struct.pack_into("<2f", header, 112, slope, inter)  # scl_slope, scl_inter as a writer leaves them
+    path.write_bytes(bytes(header))
+    values = np.asanyarray(nib.load(path).dataobj)
+    r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--json"], capture_output=True, text=True)
+    said = [line for line in r.stderr.splitlines() if "scl_inter" in line]
+    if inter == 0 or not slope or np.isnan(slope):  # no scaling of the stored 0: nothing to say
+        assert r.returncode == 0 and not said, r.stderr
+        assert json.loads(r.stdout)["voxels"] == np.count_nonzero(values) == 18
+        return
+    assert len(said) == 1 and f"scl_inter {inter:g} read a stored 0 as {inter:g}" in said[0], r.stderr
+    if np.unique(values).tolist() == [1.0, 2.0]:  # two values beside no 0: no mask
+        assert r.returncode == 2 and "not a binary volume" in r.stderr
+    else:
+        assert r.returncode == 0, r.stderr
+        assert json.loads(r.stdout)["voxels"] == np.count_nonzero(values) == mask.size - 18
+
+
 def test_surface_tiff_stack_equals_npy_and_lands_in_micrometres(tmp_path, capsys, labels):
     mask = (labels == 3).transpose(2, 1, 0).astype(np.uint8)  # a z, y, x stack as tifffile holds it
     tifffile.imwrite(tmp_path / "stack.tif", mask, imagej=True, resolution=(1 / 0.5, 1 / 0.25),
