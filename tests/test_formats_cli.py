@@ -1421,7 +1421,8 @@ def test_an_ilastik_export_is_read_by_its_axistags(tmp_path):
     assert "axis 'c' has 2 entries (axistags zyxc, shape (8, 7, 6, 2))" in lines[0], lines[0]
 
 
-def test_an_ilastik_export_is_placed_by_its_axistags_not_mirrored(tmp_path):
+@pytest.mark.parametrize("sizes", [[2.0, 0.5, 0.25, 1.0], [2.0, 0.5, 0.25]])  # per stored axis, or per z, y, x
+def test_an_ilastik_export_is_placed_by_its_axistags_not_mirrored(tmp_path, sizes):
     """ilastik stores (z, y, x, c) and names the axes in ``axistags``;
     Fiji's HDF5 plug-in gives ``element_size_um`` in the same order. The
     tagged dataset was read as stored, its z as isoflow's x: a bar along
@@ -1435,7 +1436,7 @@ def test_an_ilastik_export_is_placed_by_its_axistags_not_mirrored(tmp_path):
     with h5py.File(tmp_path / "bar.h5", "w") as f:
         data = f.create_dataset("exported_data", data=zyx)
         data.attrs["axistags"] = vigra_axistags("zyxc")
-        data.attrs["element_size_um"] = [2.0, 0.5, 0.25, 1.0]
+        data.attrs["element_size_um"] = sizes
     with h5py.File(tmp_path / "bar.h5") as f:
         stored = f["exported_data"][()]
         size_zyx = np.asarray(f["exported_data"].attrs["element_size_um"][:3])

@@ -84,6 +84,8 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     if "pitch" not in attrs and "element_size_um" in attrs:
         if index and np.ndim(pitch) == 1 and len(pitch) == len(stored):  # one per stored axis: those read
             pitch = np.asarray(pitch)[kept]
+        elif index and np.ndim(pitch) == 1 and len(pitch) == len(kept):  # one per axis read, in stored order
+            pitch = np.asarray(pitch)[[sorted(kept).index(i) for i in kept]]
         pitch = _element_size(pitch, np.ndim(array), where)
     offset = attrs.get("offset")
     # element_size_um is in micrometres by its name; isoflow's own pitch has its unit beside it, if any
