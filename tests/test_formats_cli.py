@@ -871,6 +871,31 @@ def test_a_tiff_of_several_image_series_is_refused(tmp_path, capsys):
     fails(capsys, "info", tmp_path / "two.tif", words=("two.tif", "2 image series", "3x4x5", "6x7"))
 
 
+def test_a_tiff_stack_beside_its_reduced_resolution_thumbnail_is_read(tmp_path, capsys):
+    """A microscope or scanner stores a preview beside the stack, its
+    NewSubfileType tag 1 (a reduced-resolution version of another image).
+    isoflow refused such a file as "holds 2 image series ... save the
+    stack on its own", though the file says which is the image, and
+    tifffile's imread (as scikit-image's) reads the stack. It is read: the
+    count is numpy's of tifffile's array; a second full image is still
+    refused."""
+    stack = np.zeros((4, 6, 5), np.uint8)  # z, y, x
+    stack[1:3, 2:5, 1:4] = 1
+    with tifffile.TiffWriter(tmp_path / "thumb.tif") as tif:
+        tif.write(stack, photometric="minisblack")
+        tif.write(np.full((2, 2), 255, np.uint8), photometric="minisblack", subfiletype=1)
+    with tifffile.TiffFile(tmp_path / "thumb.tif") as tif:
+        assert len(tif.series) == 2 and tif.series[1].keyframe.subfiletype == 1
+    read = tifffile.imread(tmp_path / "thumb.tif")
+    report = json.loads(run(capsys, "info", tmp_path / "thumb.tif", "--json"))
+    assert report["shape"] == list(read.shape[::-1]) and report["voxels"] == np.count_nonzero(read) == 18
+    with tifffile.TiffWriter(tmp_path / "two.tif") as tif:
+        tif.write(stack, photometric="minisblack")
+        tif.write(np.ones((2, 2), np.uint8), photometric="minisblack", subfiletype=1)
+        tif.write(np.ones((6, 7), np.uint8), photometric="minisblack")
+    fails(capsys, "info", tmp_path / "two.tif", words=("two.tif: holds 2 image series", "4x6x5", "6x7"))
+
+
 @pytest.mark.parametrize("how", ["imagej", "ome", "pages"])
 
 
