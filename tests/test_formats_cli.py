@@ -189,6 +189,37 @@ def test_a_nifti_mask_is_read_with_its_header_scaling_said_where_it_moves_0(tmp_
         assert json.loads(r.stdout)["voxels"] == np.count_nonzero(values) == mask.size - 18
 
 
+def test_a_2d_slice_off_the_world_xy_plane_says_which_world_axes_it_runs_along(tmp_path):
+    """A 2D NIfTI slice whose affine runs its axes along world y and z (a
+    sagittal slice), or a 2D NRRD in a 3D space along x and z (coronal),
+    was read with those as its x and y and its frame still RAS or LPS,
+    its place along the third world axis dropped, without a word: its
+    origin (-10.25, 19.65) was world y and z, reported as x and y. One
+    warning names the plane (nibabel's axis codes of the affine give the
+    world axes) and the place not kept; an axial slice gets none."""
+    nrrd = pytest.importorskip("nrrd")
+    mask = np.zeros((10, 12), np.uint8)
+    mask[2:7, 3:9] = 1
+    affine = np.array([[0, 0, 1.0, 5.0], [0.5, 0, 0, -10.0], [0, 0.7, 0, 20.0], [0, 0, 0, 1]])
+    nib.save(nib.Nifti1Image(mask, affine), tmp_path / "sagittal.nii.gz")
+    codes = nib.orientations.aff2axcodes(nib.load(tmp_path / "sagittal.nii.gz").affine)[:2]
+    plane = "-".join("xyz"["RAS".index(c)] for c in codes)
+    space = {"space": "left-posterior-superior", "space origin": np.array([1.0, 2.0, 3.0]), "kinds": ["domain"] * 2}
+    nrrd.write(str(tmp_path / "coronal.nrrd"), mask, dict(space, **{"space directions": [[0.5, 0, 0], [0, 0, 0.7]]}))
+    nrrd.write(str(tmp_path / "axial.nrrd"), mask, dict(space, **{"space directions": [[0.5, 0, 0], [0, 0.7, 0]]}))
+    for name, words in (("sagittal.nii.gz", (f"world's {plane} plane", "y-z", "world x = 5 is not kept")),
+                        ("coronal.nrrd", ("world's x-z plane", "world y = 2 is not kept")), ("axial.nrrd", None)):
+        r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / name), "--json"],
+                           capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        assert json.loads(r.stdout)["voxels"] == np.count_nonzero(mask)
+        said = [line for line in r.stderr.splitlines() if "plane" in line]
+        if words is None:
+            assert not said, r.stderr
+        else:
+            assert len(said) == 1 and all(w in said[0] for w in words), r.stderr
+
+
 def test_surface_tiff_stack_equals_npy_and_lands_in_micrometres(tmp_path, capsys, labels):
     mask = (labels == 3).transpose(2, 1, 0).astype(np.uint8)  # a z, y, x stack as tifffile holds it
     tifffile.imwrite(tmp_path / "stack.tif", mask, imagej=True, resolution=(1 / 0.5, 1 / 0.25),
