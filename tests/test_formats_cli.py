@@ -1517,6 +1517,35 @@ def test_an_ilastik_export_is_placed_by_its_axistags_not_mirrored(tmp_path, size
     assert np.isclose(mesh.volume, len(cells) * np.prod(size))
 
 
+def test_a_plain_zarr_array_named_z_y_x_says_it_is_read_as_stored(tmp_path):
+    """A plain zarr v3 array (no OME-Zarr metadata) is read as stored,
+    axis 0 as x (docs/formats.md); one whose ``dimension_names`` are z, y,
+    x (as tensorstore and xarray write them) was read so without a word:
+    the mirror image of the volume its names describe, x and z swapped.
+    Each command says so once, naming the names zarr gives; an array
+    named x, y, z gets no word."""
+    zarr = pytest.importorskip("zarr")
+    zyx = np.zeros((4, 6, 10), np.uint8)
+    zyx[1:3, 1:2, 2:9] = 1
+    for name, names in (("zyx.zarr", ["z", "y", "x"]), ("xyz.zarr", ["x", "y", "z"])):
+        array = zarr.create_array(str(tmp_path / name), shape=zyx.shape, chunks=(2, 3, 5), dtype="u1",
+                                  dimension_names=names, fill_value=0)
+        array[:] = zyx
+    named = zarr.open_array(str(tmp_path / "zyx.zarr"), mode="r").metadata.dimension_names
+    for command in (["info", "zyx.zarr", "--json"], ["info", "zyx.zarr", "--labels", "--json"],
+                    ["surface", "zyx.zarr", "-o", "s.ply"], ["info", "xyz.zarr", "--json"]):
+        r = subprocess.run([sys.executable, "-m", "isoflow", *command], capture_output=True, text=True, cwd=tmp_path)
+        assert r.returncode == 0, r.stderr
+        said = [line for line in r.stderr.splitlines() if "dimension_names" in line]
+        if command[1] == "xyz.zarr":
+            assert not said, r.stderr
+            continue
+        assert len(said) == 1 and f"dimension_names are {', '.join(named)}" in said[0], r.stderr
+        assert "z as x, x as z" in said[0] and "mirror image" in said[0]
+        if command[0] == "info" and "--labels" not in command:
+            assert json.loads(r.stdout)["shape"] == list(zyx.shape)  # as stored, as documented
+
+
 def test_a_dataset_an_hdf5_external_link_names_is_read_and_listed(tmp_path):
     """A file that gathers other files' volumes by external links
     (``f["v"] = h5py.ExternalLink("scan.h5", "/v")``) was "holds no dataset",
