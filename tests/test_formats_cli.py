@@ -155,6 +155,71 @@ def test_a_negative_pixdim_of_a_nifti_without_forms_mirrors_its_axis(tmp_path, l
     assert "negative: that axis runs mirrored" in warned and len(warned.splitlines()) == 1
 
 
+@pytest.mark.parametrize("slope, inter", [(2.0, 0.0), (np.nan, 5.0), (0.0, 5.0), (1.0, 1.0), (1.0, -1.0)])
+def test_a_nifti_mask_is_read_with_its_header_scaling_said_where_it_moves_0(tmp_path, slope, inter):
+    """NIfTI scales the stored values, ``scl_slope * stored + scl_inter``,
+    unless scl_slope is 0 or NaN ("no scaling"). A 0/1 mask with slope 2
+    is 0/2, a mask; slope 0 or NaN leave it 0/1. Under scl_inter 1 it is
+    1/2 (refused as no mask), under -1 it is -1/0, whose object is the
+    voxels stored 0: it read so without a word. The values are nibabel's
+    (the voxel count of its scaled array where it is a mask), and a
+    scaling that moves the stored 0 is said in a warning naming
+    scl_inter and its value."""
+    import struct
+
+    mask = np.zeros((6, 5, 4), np.uint8)
+    mask[1:4, 1:4, 1:3] = 1
+    path = tmp_path / "mask.nii"
+    nib.save(nib.Nifti1Image(mask, np.eye(4)), path)
+    header = bytearray(path.read_bytes())
+    struct.pack_into("<2f", header, 112, slope, inter)  # scl_slope, scl_inter as a writer leaves them
+    path.write_bytes(bytes(header))
+    values = np.asanyarray(nib.load(path).dataobj)
+    r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--json"], capture_output=True, text=True)
+    said = [line for line in r.stderr.splitlines() if "scl_inter" in line]
+    if inter == 0 or not slope or np.isnan(slope):  # no scaling of the stored 0: nothing to say
+        assert r.returncode == 0 and not said, r.stderr
+        assert json.loads(r.stdout)["voxels"] == np.count_nonzero(values) == 18
+        return
+    assert len(said) == 1 and f"scl_inter {inter:g} read a stored 0 as {inter:g}" in said[0], r.stderr
+    if np.unique(values).tolist() == [1.0, 2.0]:  # two values beside no 0: no mask
+        assert r.returncode == 2 and "not a binary volume" in r.stderr
+    else:
+        assert r.returncode == 0, r.stderr
+        assert json.loads(r.stdout)["voxels"] == np.count_nonzero(values) == mask.size - 18
+
+
+def test_a_2d_slice_off_the_world_xy_plane_says_which_world_axes_it_runs_along(tmp_path):
+    """A 2D NIfTI slice whose affine runs its axes along world y and z (a
+    sagittal slice), or a 2D NRRD in a 3D space along x and z (coronal),
+    was read with those as its x and y and its frame still RAS or LPS,
+    its place along the third world axis dropped, without a word: its
+    origin (-10.25, 19.65) was world y and z, reported as x and y. One
+    warning names the plane (nibabel's axis codes of the affine give the
+    world axes) and the place not kept; an axial slice gets none."""
+    nrrd = pytest.importorskip("nrrd")
+    mask = np.zeros((10, 12), np.uint8)
+    mask[2:7, 3:9] = 1
+    affine = np.array([[0, 0, 1.0, 5.0], [0.5, 0, 0, -10.0], [0, 0.7, 0, 20.0], [0, 0, 0, 1]])
+    nib.save(nib.Nifti1Image(mask, affine), tmp_path / "sagittal.nii.gz")
+    codes = nib.orientations.aff2axcodes(nib.load(tmp_path / "sagittal.nii.gz").affine)[:2]
+    plane = "-".join("xyz"["RAS".index(c)] for c in codes)
+    space = {"space": "left-posterior-superior", "space origin": np.array([1.0, 2.0, 3.0]), "kinds": ["domain"] * 2}
+    nrrd.write(str(tmp_path / "coronal.nrrd"), mask, dict(space, **{"space directions": [[0.5, 0, 0], [0, 0, 0.7]]}))
+    nrrd.write(str(tmp_path / "axial.nrrd"), mask, dict(space, **{"space directions": [[0.5, 0, 0], [0, 0.7, 0]]}))
+    for name, words in (("sagittal.nii.gz", (f"world's {plane} plane", "y-z", "world x = 5 is not kept")),
+                        ("coronal.nrrd", ("world's x-z plane", "world y = 2 is not kept")), ("axial.nrrd", None)):
+        r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / name), "--json"],
+                           capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        assert json.loads(r.stdout)["voxels"] == np.count_nonzero(mask)
+        said = [line for line in r.stderr.splitlines() if "plane" in line]
+        if words is None:
+            assert not said, r.stderr
+        else:
+            assert len(said) == 1 and all(w in said[0] for w in words), r.stderr
+
+
 def test_surface_tiff_stack_equals_npy_and_lands_in_micrometres(tmp_path, capsys, labels):
     mask = (labels == 3).transpose(2, 1, 0).astype(np.uint8)  # a z, y, x stack as tifffile holds it
     tifffile.imwrite(tmp_path / "stack.tif", mask, imagej=True, resolution=(1 / 0.5, 1 / 0.25),
@@ -837,6 +902,31 @@ def test_a_tiff_of_several_image_series_is_refused(tmp_path, capsys):
     fails(capsys, "info", tmp_path / "two.tif", words=("two.tif", "2 image series", "3x4x5", "6x7"))
 
 
+def test_a_tiff_stack_beside_its_reduced_resolution_thumbnail_is_read(tmp_path, capsys):
+    """A microscope or scanner stores a preview beside the stack, its
+    NewSubfileType tag 1 (a reduced-resolution version of another image).
+    isoflow refused such a file as "holds 2 image series ... save the
+    stack on its own", though the file says which is the image, and
+    tifffile's imread (as scikit-image's) reads the stack. It is read: the
+    count is numpy's of tifffile's array; a second full image is still
+    refused."""
+    stack = np.zeros((4, 6, 5), np.uint8)  # z, y, x
+    stack[1:3, 2:5, 1:4] = 1
+    with tifffile.TiffWriter(tmp_path / "thumb.tif") as tif:
+        tif.write(stack, photometric="minisblack")
+        tif.write(np.full((2, 2), 255, np.uint8), photometric="minisblack", subfiletype=1)
+    with tifffile.TiffFile(tmp_path / "thumb.tif") as tif:
+        assert len(tif.series) == 2 and tif.series[1].keyframe.subfiletype == 1
+    read = tifffile.imread(tmp_path / "thumb.tif")
+    report = json.loads(run(capsys, "info", tmp_path / "thumb.tif", "--json"))
+    assert report["shape"] == list(read.shape[::-1]) and report["voxels"] == np.count_nonzero(read) == 18
+    with tifffile.TiffWriter(tmp_path / "two.tif") as tif:
+        tif.write(stack, photometric="minisblack")
+        tif.write(np.ones((2, 2), np.uint8), photometric="minisblack", subfiletype=1)
+        tif.write(np.ones((6, 7), np.uint8), photometric="minisblack")
+    fails(capsys, "info", tmp_path / "two.tif", words=("two.tif: holds 2 image series", "4x6x5", "6x7"))
+
+
 @pytest.mark.parametrize("how", ["imagej", "ome", "pages"])
 
 
@@ -1375,7 +1465,8 @@ def test_an_ilastik_export_is_read_by_its_axistags(tmp_path):
     got = json.loads(done.stdout)
     with h5py.File(tmp_path / "seg.h5") as f:
         stored = f["exported_data"][()]
-    assert got["shape"] == list(stored.shape[:3]) and got["voxels"] == np.count_nonzero(stored == 2)
+    # (z, y, x) as the tags name them: read as isoflow's (x, y, z)
+    assert got["shape"] == list(stored.shape[2::-1]) and got["voxels"] == np.count_nonzero(stored == 2)
     from scipy import ndimage
 
     # a box and a voxel apart: counted in 3D (b1 and b2 of a 4D reading were not counted)
@@ -1384,6 +1475,75 @@ def test_an_ilastik_export_is_read_by_its_axistags(tmp_path):
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1, done.stderr
     assert "axis 'c' has 2 entries (axistags zyxc, shape (8, 7, 6, 2))" in lines[0], lines[0]
+
+
+@pytest.mark.parametrize("sizes", [[2.0, 0.5, 0.25, 1.0], [2.0, 0.5, 0.25]])  # per stored axis, or per z, y, x
+def test_an_ilastik_export_is_placed_by_its_axistags_not_mirrored(tmp_path, sizes):
+    """ilastik stores (z, y, x, c) and names the axes in ``axistags``;
+    Fiji's HDF5 plug-in gives ``element_size_um`` in the same order. The
+    tagged dataset was read as stored, its z as isoflow's x: a bar along
+    x was reported along x from 2 to 6 um (its z extent) with z's voxel
+    size, and its surface written mirrored (x and z swapped). The truth is
+    h5py's array placed by the tags: the bar's voxels' corners times the
+    voxel size of their own axis."""
+    h5py = pytest.importorskip("h5py")
+    zyx = np.zeros((4, 6, 10, 1), np.uint8)
+    zyx[1:3, 1:2, 2:9, 0] = 1  # a bar along x
+    with h5py.File(tmp_path / "bar.h5", "w") as f:
+        data = f.create_dataset("exported_data", data=zyx)
+        data.attrs["axistags"] = vigra_axistags("zyxc")
+        data.attrs["element_size_um"] = sizes
+    with h5py.File(tmp_path / "bar.h5") as f:
+        stored = f["exported_data"][()]
+        size_zyx = np.asarray(f["exported_data"].attrs["element_size_um"][:3])
+    z, y, x = np.nonzero(stored[..., 0])
+    cells = np.stack([x, y, z], axis=1)
+    size = size_zyx[::-1]
+    low, high = cells.min(0) * size, (cells.max(0) + 1) * size
+
+    def isoflow_cli(*args):
+        return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True,
+                              cwd=tmp_path)
+
+    done = isoflow_cli("info", "bar.h5", "--json")
+    assert done.returncode == 0, done.stderr
+    got = json.loads(done.stdout)
+    assert got["shape"] == [10, 6, 4] and got["unit"] == "\u00b5m"
+    assert np.allclose(got["pitch"], size) and np.allclose(got["bbox"], np.concatenate([low, high]))
+    done = isoflow_cli("surface", "bar.h5", "-o", "bar.ply")
+    assert done.returncode == 0, done.stderr
+    mesh = trimesh.load(tmp_path / "bar.ply", process=False)
+    assert np.allclose(mesh.bounds, [low, high])
+    assert np.isclose(mesh.volume, len(cells) * np.prod(size))
+
+
+def test_a_plain_zarr_array_named_z_y_x_says_it_is_read_as_stored(tmp_path):
+    """A plain zarr v3 array (no OME-Zarr metadata) is read as stored,
+    axis 0 as x (docs/formats.md); one whose ``dimension_names`` are z, y,
+    x (as tensorstore and xarray write them) was read so without a word:
+    the mirror image of the volume its names describe, x and z swapped.
+    Each command says so once, naming the names zarr gives; an array
+    named x, y, z gets no word."""
+    zarr = pytest.importorskip("zarr")
+    zyx = np.zeros((4, 6, 10), np.uint8)
+    zyx[1:3, 1:2, 2:9] = 1
+    for name, names in (("zyx.zarr", ["z", "y", "x"]), ("xyz.zarr", ["x", "y", "z"])):
+        array = zarr.create_array(str(tmp_path / name), shape=zyx.shape, chunks=(2, 3, 5), dtype="u1",
+                                  dimension_names=names, fill_value=0)
+        array[:] = zyx
+    named = zarr.open_array(str(tmp_path / "zyx.zarr"), mode="r").metadata.dimension_names
+    for command in (["info", "zyx.zarr", "--json"], ["info", "zyx.zarr", "--labels", "--json"],
+                    ["surface", "zyx.zarr", "-o", "s.ply"], ["info", "xyz.zarr", "--json"]):
+        r = subprocess.run([sys.executable, "-m", "isoflow", *command], capture_output=True, text=True, cwd=tmp_path)
+        assert r.returncode == 0, r.stderr
+        said = [line for line in r.stderr.splitlines() if "dimension_names" in line]
+        if command[1] == "xyz.zarr":
+            assert not said, r.stderr
+            continue
+        assert len(said) == 1 and f"dimension_names are {', '.join(named)}" in said[0], r.stderr
+        assert "z as x, x as z" in said[0] and "mirror image" in said[0]
+        if command[0] == "info" and "--labels" not in command:
+            assert json.loads(r.stdout)["shape"] == list(zyx.shape)  # as stored, as documented
 
 
 def test_a_dataset_an_hdf5_external_link_names_is_read_and_listed(tmp_path):
@@ -1810,6 +1970,38 @@ def test_a_detached_nrrd_header_whose_data_file_is_gone_names_it(tmp_path, capsy
     fails(capsys, "info", tmp_path / "scan.nhdr", words=("data file", name, "not there"))
     (tmp_path / "elsewhere").rename(data)
     assert json.loads(run(capsys, "info", tmp_path / "scan.nhdr", "--json"))["voxels"] == np.count_nonzero(labels == 3)
+
+
+def test_a_detached_nrrd_header_over_several_data_files_is_refused_by_its_field(tmp_path, capsys):
+    """NRRD lets a detached header spread its data over several files
+    (``data file: LIST`` with one name a line after it, or teem's pattern
+    ``slice%03d.raw 0 7 1 2``), which pynrrd does not read: the lines
+    were "not a readable NRRD file (ValueError: not enough values to
+    unpack ...)" and "(FileNotFoundError: ... 'slice%03d.raw 0 7 1 2')",
+    and a ``type: block`` file's "negative dimensions are not allowed".
+    Each is one line naming the field and its value. A single data file
+    whose name holds a space or starts with LIST reads, its count that
+    of pynrrd's array."""
+    nrrd = pytest.importorskip("nrrd")
+    mask = np.zeros((6, 5, 4), np.uint8)
+    mask[1:4, 1:3, 1:3] = 1
+    head = "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 6 5 4\nencoding: raw\n"
+    for k in range(4):
+        (tmp_path / f"slice{k:03d}.raw").write_bytes(mask[:, :, k].tobytes(order="F"))
+    names = "".join(f"slice{k:03d}.raw\n" for k in range(4))
+    (tmp_path / "list.nhdr").write_text(head + "data file: LIST 2\n" + names)
+    (tmp_path / "pattern.nhdr").write_text(head + "data file: slice%03d.raw 0 3 1 2\n")
+    (tmp_path / "block.nrrd").write_bytes(b"NRRD0004\ntype: block\nblock size: 2\ndimension: 3\nsizes: 6 5 4\n"
+                                          b"encoding: raw\n\n" + bytes(2 * mask.size))
+    fails(capsys, "info", tmp_path / "list.nhdr", words=("list.nhdr: its field 'data file' (LIST 2)", "several files"))
+    fails(capsys, "info", tmp_path / "pattern.nhdr",
+          words=("pattern.nhdr: its field 'data file' (slice%03d.raw 0 3 1 2)", "several files"))
+    fails(capsys, "info", tmp_path / "block.nrrd", words=("block.nrrd: NRRD field 'type' is 'block'",))
+    for name in ("my scan.raw", "LISTING.raw"):
+        (tmp_path / name).write_bytes(mask.tobytes(order="F"))
+        (tmp_path / "one.nhdr").write_text(head + f"data file: {name}\n")
+        voxels = np.count_nonzero(nrrd.read(str(tmp_path / "one.nhdr"))[0])
+        assert json.loads(run(capsys, "info", tmp_path / "one.nhdr", "--json"))["voxels"] == voxels == 12
 
 
 @pytest.mark.parametrize("suffix, meshes", [("tif", 1), ("nrrd", 1), ("binvox", 1), ("nii.gz", 1), ("vox", 1),

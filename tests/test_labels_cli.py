@@ -1590,6 +1590,28 @@ def test_cellpose_s_seg_npy_is_one_line_with_the_line_that_saves_its_masks(tmp_p
     assert [[r["bbox-0"], r["bbox-1"]] for r in rows] == [[c, r] for r, c in zip(want["bbox-0"], want["bbox-1"])]
 
 
+@pytest.mark.parametrize("member", ["volume", "pitch", "seg"])
+def test_an_npz_array_of_python_objects_is_one_line_naming_the_array(tmp_path, capsys, member):
+    """An ``.npz`` whose volume (or its voxel size) is an array of Python
+    objects (``dtype=object``, pickled inside the archive) was refused as
+    "not a readable numpy file (ValueError: Object arrays cannot be loaded
+    when allow_pickle=False)", naming neither the array nor what to do.
+    The line names the array and still unpickles nothing; the same
+    archive with that array saved as numbers reads, its count numpy's."""
+    labels = np.zeros((4, 5, 6), np.uint8)
+    labels[1:3, 1:4, 2:5] = 1
+    arrays = {"volume": labels, "pitch": np.array([0.5, 0.5, 1.0])} if member != "seg" else {"seg": labels}
+    numbers = dict(arrays)
+    arrays[member] = arrays[member].astype(object)
+    np.savez(tmp_path / "objects.npz", **arrays)
+    fails(capsys, "info", tmp_path / "objects.npz", "--labels",
+          words=(f"{tmp_path / 'objects.npz'}: its array {member!r} holds Python objects",))
+    fails(capsys, "info", tmp_path / "objects.npz",
+          words=(f"{tmp_path / 'objects.npz'}: its array {member!r} holds Python objects",))
+    np.savez(tmp_path / "numbers.npz", **numbers)
+    assert json.loads(run(capsys, "info", tmp_path / "numbers.npz", "--json"))["voxels"] == np.count_nonzero(labels)
+
+
 def test_labels_of_an_ome_zarr_image_name_the_segmentations_its_labels_group_holds(tmp_path, capsys, segmentation):
     """``info image.zarr --labels`` of an OME-Zarr image that keeps its
     segmentation in ``labels/`` (NGFF's image-label) read the image's

@@ -691,6 +691,51 @@ def fourth_axis_name(path: str | os.PathLike) -> str | None:
     return names[3] if names[:3] == ["x", "y", "z"] and len(names) == 4 else None
 
 
+def stored_order_said(array, where: str) -> str | None:
+    """Warn where a plain zarr array's ``dimension_names`` (zarr v3) name
+    its spatial axes otherwise than isoflow reads them: a plain array is
+    read as stored, axis 0 as x, 1 as y, 2 as z (docs/formats.md), so an
+    array whose names are z, y, x is read with its z as x, the mirror
+    image of the volume its names describe (coordinates and a surface
+    with x and z swapped; counts and topology are the same). An OME-Zarr
+    image's axes are read by name.
+
+    Parameters
+    ----------
+    array : zarr.Array
+        The plain array (no ``multiscales`` above it).
+    where : str
+        The store, named in the warning.
+
+    Returns
+    -------
+    str or None
+        The warning given, or None where the names agree (or there are none).
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> a = zarr.create_array(str(folder / "a.zarr"), shape=(4, 5, 6), dtype="u1", dimension_names=list("xyz"))
+    >>> stored_order_said(a, "a.zarr") is None
+    True
+    """
+    try:
+        names = [str(n).lower() for n in getattr(array.metadata, "dimension_names", None) or ()]
+    except AttributeError:  # (zarr v2 arrays have no names)
+        return None
+    spatial = ("x", "y", "z")
+    if len(names) != array.ndim or not any(n in spatial and n != a for n, a in zip(names, "xyzt")):
+        return None
+    read_as = ", ".join(f"{n} as {a}" for n, a in zip(names, "xyzt") if n != a and n in spatial)
+    text = (f"{where}: its dimension_names are {', '.join(names)}, and a plain zarr array is read as stored (axis 0 "
+            f"as x, 1 as y, 2 as z): {read_as}, the mirror image of the volume the names describe (its coordinates "
+            "and surface with those axes swapped; counts and topology unchanged); save it with dimension_names "
+            "x, y, z, or as OME-Zarr, whose axes are read by name")
+    warn(text)
+    return text
+
+
 def split_store(path: str | os.PathLike, suffixes: tuple[str, ...] = ("zarr",)) -> tuple[Path, str | None]:
     """The file or store a path names and the name after its colon:
     ``IMAGE.zarr:1`` -> (IMAGE.zarr, '1'), a resolution level or an array of

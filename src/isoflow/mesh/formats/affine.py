@@ -65,6 +65,8 @@ def axis_aligned(array: np.ndarray, matrix, centre0, where: str):
             "world axes; isoflow keeps the voxel sizes and the first voxel's place, so exported "
             "coordinates are axis-aligned (off by that rotation); resample the image to remove it"
         )
+    if n < m.shape[0] and sorted(rows) != list(range(n)):
+        plane_off_axes(rows, c0, where)
     # voxel 0 of the turned array is the old voxel at the far end of every flipped axis
     flipped = dominant < 0
     first = np.where(flipped, np.array(array.shape[:n]) - 1, 0)
@@ -75,6 +77,46 @@ def axis_aligned(array: np.ndarray, matrix, centre0, where: str):
     pitch = norms[order]
     origin = centre[rows[order]] - pitch / 2
     return out, pitch, origin
+
+
+def plane_off_axes(rows, centre0, where: str) -> str:
+    """Warn that an image of fewer axes than the world (a 2D slice placed
+    in 3D) runs along world axes other than the first ones: a sagittal
+    slice's axes run along y and z, and are read as the image's x and y,
+    so its coordinates (and the letters of its frame) are those of world
+    y and z, and its place along world x is not kept.
+
+    Parameters
+    ----------
+    rows : array_like of int
+        The world axis each array axis runs along.
+    centre0 : array_like
+        The world position of voxel 0's centre.
+    where : str
+        The file, named in the warning.
+
+    Returns
+    -------
+    str
+        The warning given.
+
+    Examples
+    --------
+    >>> print(plane_off_axes([1, 2], [5.0, -10.0, 20.0], "sagittal.nii.gz"))
+    sagittal.nii.gz: a 2D image in the world's y-z plane: read with world y and z as its x and y, so its \
+coordinates are world y and z (not its frame's x and y), and its place at world x = 5 is not kept
+    """
+    names = "xyz"
+    used = sorted(int(r) for r in rows)
+    dropped = [i for i in range(len(centre0)) if i not in used]
+    place = ", ".join(f"world {names[i]} = {float(centre0[i]):.6g}" for i in dropped)
+    along = [names[i] for i in used]
+    text = (f"{where}: a {len(used)}D image in the world's {'-'.join(along)} plane: read with world "
+            f"{' and '.join(along)} as its {' and '.join(names[:len(used)])}, so its coordinates are world "
+            f"{' and '.join(along)} (not its frame's {' and '.join(names[:len(used)])}), and its place at {place} is "
+            "not kept")
+    note(text)
+    return text
 
 
 def _world_axes(m: np.ndarray, norms: np.ndarray):

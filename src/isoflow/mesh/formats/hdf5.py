@@ -7,7 +7,8 @@ a voxel size); otherwise the error lists the datasets to choose from
 (a dataset an external link names among them). A dataset whose axes
 vigra's ``axistags`` attribute names (ilastik's exports) is read by them
 (:func:`tagged_axes`): a channel axis of one entry dropped, of several
-refused.
+refused, and the spatial axes turned to the x, y, z the tags name (ilastik
+stores z, y, x).
 
 Metadata: isoflow writes the attributes ``pitch`` (one number, or one per
 axis), ``origin``, ``offset`` and ``parity`` on the dataset and reads them
@@ -74,16 +75,17 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         ds = f[_choose(f, h5py, path, dataset)]
         attrs = dict(ds.attrs)
         stored = ds.shape
-        index, kept, time = tagged_axes(attrs.get("axistags"), stored, where)
+        index, kept = tagged_axes(attrs.get("axistags"), stored, where)
         check_shape([stored[i] for i in kept], ds.dtype, where)
         array = ds[index] if index else ds[()]
-    if time is not None:  # (x, y, z, t), as a 4D volume is read
-        array = np.moveaxis(array, time, -1)
-        kept = kept[:time] + kept[time + 1:] + [kept[time]]
+    # the axes read are in stored order: turned to the order the tags give them (x, y, z, t)
+    array = np.transpose(array, [sorted(kept).index(i) for i in kept])
     pitch = attrs.get("pitch", attrs.get("element_size_um", 1.0))
     if "pitch" not in attrs and "element_size_um" in attrs:
         if index and np.ndim(pitch) == 1 and len(pitch) == len(stored):  # one per stored axis: those read
             pitch = np.asarray(pitch)[kept]
+        elif index and np.ndim(pitch) == 1 and len(pitch) == len(kept):  # one per axis read, in stored order
+            pitch = np.asarray(pitch)[[sorted(kept).index(i) for i in kept]]
         pitch = _element_size(pitch, np.ndim(array), where)
     offset = attrs.get("offset")
     # element_size_um is in micrometres by its name; isoflow's own pitch has its unit beside it, if any
@@ -96,7 +98,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
                      space=space, names=names)
 
 
-def tagged_axes(tags: object, shape: tuple[int, ...], where: str) -> tuple[tuple, list[int], int | None]:
+def tagged_axes(tags: object, shape: tuple[int, ...], where: str) -> tuple[tuple, list[int]]:
     """How to read a dataset whose ``axistags`` attribute (vigra's JSON, as
     ilastik writes its exports, ``exported_data`` of z, y, x, c) names its
     axes: a channel axis ``c`` of one entry (or a time axis ``t``) is
@@ -104,9 +106,14 @@ def tagged_axes(tags: object, shape: tuple[int, ...], where: str) -> tuple[tuple
     entries is refused, as theirs are, rather than read as a fourth
     spatial or time axis; a time axis of several entries beside three
     other axes becomes the last (isoflow's x, y, z, t), and beside fewer is
-    refused. The other axes stay as stored (axis 0 is x, as for any
-    dataset). Without such an attribute (or one that does not fit the
-    shape) every axis is read as stored.
+    refused. The spatial axes are read in the order the tags name them:
+    ilastik's z, y, x as isoflow's x, y, z (axis 0 is x), as a TIFF's and
+    an OME-Zarr image's are, so that the voxel sizes, the bounding box and
+    a surface are those of the image ilastik and Fiji show, not its mirror
+    image with x and z swapped. Axes the tags name otherwise (a key other
+    than x, y, z, c and t, a spatial key twice) stay as stored, as does
+    every axis of a dataset without such an attribute (or one that does
+    not fit the shape).
 
     Parameters
     ----------
@@ -122,17 +129,16 @@ def tagged_axes(tags: object, shape: tuple[int, ...], where: str) -> tuple[tuple
     index : tuple
         What to read the dataset by (``()``: the whole as stored).
     kept : list of int
-        The stored axes read, in stored order.
-    time : int or None
-        The position among them of a time axis to move last.
+        The stored axes read, in the order isoflow's axes take them (x,
+        y, z, then t).
 
     Examples
     --------
     >>> tags = '{"axes": [{"key": "z"}, {"key": "y"}, {"key": "x"}, {"key": "c"}]}'
     >>> tagged_axes(tags, (8, 7, 6, 1), "a.h5")
-    ((slice(None, None, None), slice(None, None, None), slice(None, None, None), 0), [0, 1, 2], None)
+    ((slice(None, None, None), slice(None, None, None), slice(None, None, None), 0), [2, 1, 0])
     >>> tagged_axes(None, (8, 7, 6, 1), "a.h5")
-    ((), [0, 1, 2, 3], None)
+    ((), [0, 1, 2, 3])
     """
     import json
 
@@ -142,19 +148,24 @@ def tagged_axes(tags: object, shape: tuple[int, ...], where: str) -> tuple[tuple
     except (TypeError, ValueError, KeyError, AttributeError, UnicodeDecodeError):
         keys = None
     if tags is None or keys is None or len(keys) != len(shape):
-        return (), list(range(len(shape))), None
+        return (), list(range(len(shape)))
     stated = f"(axistags {''.join(keys)}, shape {tuple(int(n) for n in shape)})"
     for key, n in zip(keys, shape):
         if key == "c" and n > 1:
             raise IsoflowError(f"{where}: axis 'c' has {n} entries {stated}; isoflow reads one volume: save one "
                                "channel")
     kept = [i for i, (key, n) in enumerate(zip(keys, shape)) if key not in ("c", "t") or n > 1]
-    times = [k for k, i in enumerate(kept) if keys[i] == "t"]
+    times = [i for i in kept if keys[i] == "t"]
     if times and len(kept) != 4:
-        raise IsoflowError(f"{where}: axis 't' has {shape[kept[times[0]]]} entries {stated}; isoflow reads one "
+        raise IsoflowError(f"{where}: axis 't' has {shape[times[0]]} entries {stated}; isoflow reads one "
                            "volume: save one time point (a time series is read as 4D only of 3D volumes)")
     index = tuple(slice(None) if i in kept else 0 for i in range(len(shape)))
-    return index, kept, times[0] if times else None
+    named = [keys[i] for i in kept]
+    if set(named) <= set("xyzt") and len(set(named)) == len(named):
+        kept = sorted(kept, key=lambda i: "xyzt".index(keys[i]))
+    else:  # axes the tags do not name as x, y, z: as stored, a time axis last
+        kept = [i for i in kept if i not in times] + times
+    return index, kept
 
 
 def _element_size(value, ndim: int, where: str) -> np.ndarray:

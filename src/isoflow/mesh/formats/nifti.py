@@ -105,6 +105,7 @@ def image_volume(img, where: str) -> RawVolume:
     """
     check_shape(img.shape, img.get_data_dtype(), where)
     data = np.asanyarray(img.dataobj)  # the stored type (scaled to float only if the file says so)
+    zero_scaled(img.dataobj, where)
     affine = np.asarray(img.affine, np.float64)
     # the standard's world of an sform or qform is RAS; method 1's voxel grid has no anatomical frame
     space: str | None = "RAS"
@@ -118,6 +119,44 @@ def image_volume(img, where: str) -> RawVolume:
     unit = length_unit(img.header.get_xyzt_units()[0])  # 'mm', 'micron', 'meter' or 'unknown' (none)
     forms_disagree(img.header, img.shape, where, unit)
     return placed_by_affine(data, affine, where, unit, space)
+
+
+def zero_scaled(dataobj, where: str) -> float:
+    """Warn where a NIfTI header's scaling reads a stored 0 as another
+    value (``scl_inter`` not 0, with a ``scl_slope`` that the standard
+    applies: neither 0 nor NaN). The values read are ``scl_slope *
+    stored + scl_inter``, as the standard, nibabel and ITK read them; a
+    mask stored 0/1 under ``scl_inter`` 1 is read as 1/2 (refused as no
+    mask), under ``scl_inter`` -1 as -1/0, whose object is then the
+    voxels stored 0. The file's values are not changed, but the voxels
+    stored as background are said to be read as something else.
+
+    Parameters
+    ----------
+    dataobj : nibabel.arrayproxy.ArrayProxy or numpy.ndarray
+        The image's ``dataobj``: its ``slope`` and ``inter`` are the
+        scaling nibabel applies (an array in memory has none).
+    where : str
+        The file, named in the warning.
+
+    Returns
+    -------
+    float
+        The value a stored 0 is read as (0 where it stays 0).
+
+    Examples
+    --------
+    >>> zero_scaled(np.zeros((2, 2, 2)), "a.nii")  # an array in memory: no scaling
+    0.0
+    """
+    slope, inter = float(getattr(dataobj, "slope", 1.0)), float(getattr(dataobj, "inter", 0.0))
+    if inter == 0 or not np.isfinite(inter):
+        return 0.0
+    sign = "-" if inter < 0 else "+"
+    note(f"{where}: its header's scl_slope {slope:g} and scl_inter {inter:g} read a stored 0 as {inter:g} (value = "
+         f"{slope:g} x stored {sign} {abs(inter):g}, as the NIfTI standard, nibabel and ITK read it): the voxels stored "
+         f"0 are not background; a mask stored 0/1 is read as {inter:g}/{slope + inter:g}")
+    return inter
 
 
 def forms_disagree(header, shape, where: str, unit: str | None) -> float:

@@ -34,14 +34,14 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
                 if dataset is not None and dataset not in names:
                     raise IsoflowError(f"{path}: holds no array {dataset!r} (its arrays: {', '.join(names)})")
                 if dataset not in (None, "volume"):  # one array named: the array alone
-                    arr = z[dataset]
+                    arr = _member(z, dataset, path)
                 elif "volume" in names:
-                    arr = z["volume"]
+                    arr = _member(z, "volume", path)
                     for key in ("offset", "parity", "pitch", "origin", "unit", "space", "label_names"):
                         if key in names:
-                            meta[key] = z[key]
+                            meta[key] = _member(z, key, path)
                 elif len(names) == 1:
-                    arr = z[names[0]]
+                    arr = _member(z, names[0], path)
                 else:
                     raise IsoflowError(f"{path}: holds arrays {', '.join(names)}; name one as {path}:{names[0]}, "
                                        "or save the volume as 'volume'")
@@ -70,6 +70,32 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     space = space_given(str(meta["space"]), f"{path}: array 'space'") if "space" in meta else None
     return RawVolume(arr, meta.get("pitch", 1.0), meta.get("origin"), meta.get("offset"), meta.get("parity", 0),
                      unit=unit, space=space, names=names)
+
+
+def _member(archive, name: str, path: Path) -> np.ndarray:
+    """The array ``name`` of an ``.npz`` archive; one of Python objects
+    (``dtype=object``, a pickle inside the archive, which ``np.load``
+    reads only with ``allow_pickle``) refused in one line naming it: it
+    was numpy's "Object arrays cannot be loaded when allow_pickle=False",
+    which names neither the array nor what to do."""
+    try:
+        return archive[name]
+    except ValueError:
+        if not _member_holds_objects(archive, name):
+            raise
+        raise IsoflowError(f"{path}: its array {name!r} holds Python objects (dtype object, a pickle), which isoflow "
+                           "does not load; save it as an array of numbers and give that") from None
+
+
+def _member_holds_objects(archive, name: str) -> bool:
+    """Whether the ``.npy`` header of the array ``name`` of an ``.npz``
+    says it holds Python objects."""
+    try:
+        with archive.zip.open(f"{name}.npy") as fh:
+            header = _npy_header(fh)
+    except (OSError, KeyError):
+        return False
+    return header is not None and header[2].hasobject
 
 
 def _holds_objects(path: Path) -> bool:
@@ -133,12 +159,21 @@ def _header(path: Path) -> tuple | None:
     alone; None for what is not a plain ``.npy``."""
     try:
         with open(path, "rb") as fh:
-            version = np.lib.format.read_magic(fh)
-            header = {(1, 0): np.lib.format.read_array_header_1_0,
-                      (2, 0): np.lib.format.read_array_header_2_0}.get(version)
-            if header is None:  # (3.0: the same header in UTF-8; rare)
-                return None
-            return header(fh)
+            return _npy_header(fh)
+    except OSError:  # unreadable: the reader says what
+        return None
+
+
+def _npy_header(fh) -> tuple | None:
+    """The header of the ``.npy`` stream open at its start in ``fh``
+    (a file, or an array of an ``.npz``), as :func:`_header` gives it."""
+    try:
+        version = np.lib.format.read_magic(fh)
+        header = {(1, 0): np.lib.format.read_array_header_1_0,
+                  (2, 0): np.lib.format.read_array_header_2_0}.get(version)
+        if header is None:  # (3.0: the same header in UTF-8; rare)
+            return None
+        return header(fh)
     except Exception:  # not an .npy (an .npz by another name, a bad file): the reader says what
         return None
 

@@ -73,10 +73,19 @@ def _check_data_file(header: dict, path: Path) -> None:
     """Refuse a detached header (``.nhdr``) whose ``data file`` is not
     there, naming the field and the file it names (relative to the
     header's folder, as the format reads it), before the reader fails on
-    it. A list of files (``LIST``, a ``%d`` pattern) is left to the reader."""
+    it; and one whose data lie in several files (``LIST``, a ``%d``
+    pattern), which pynrrd does not read (it failed on them as "not enough
+    values to unpack" or a file named ``slice%03d.raw 0 7 1``)."""
     name = header.get("data file", header.get("datafile"))
-    if not isinstance(name, str) or name.startswith("LIST") or " " in name.strip() or "%" in name:
+    if not isinstance(name, str):
         return
+    parts = name.split()
+    # teem's pattern: "slice%03d.raw MIN MAX STEP [SUBDIM]"; a single name may hold a space
+    pattern = "%" in name and len(parts) in (4, 5) and all(p.lstrip("+-").isdigit() for p in parts[1:])
+    if parts[:1] == ["LIST"] or pattern:
+        raise IsoflowError(f"{path}: its field 'data file' ({name.strip()}) spreads the data over several files, "
+                           "which isoflow's NRRD reader (pynrrd) does not read; save the volume as one .nrrd "
+                           "(3D Slicer, ITK and teem's unu read such a header)")
     target = Path(name) if Path(name).is_absolute() else Path(path).parent / name
     if not target.is_file():
         raise IsoflowError(f"{path}: its data file, {name} (field 'data file'), is not there ({target} not found)")
@@ -91,6 +100,11 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         header = read_header(fh)  # pynrrd's, a 3D Slicer segment's UTF-8 name read whole
         sizes = [int(s) for s in header["sizes"]]
         check_shape(sizes, np.uint8, where)
+        if str(header.get("type", "")).lower() == "block":
+            # opaque blocks: pynrrd failed on them as "negative dimensions are not allowed"
+            raise IsoflowError(f"{where}: NRRD field 'type' is 'block' (opaque blocks of "
+                               f"{header.get('block size', header.get('blocksize', '?'))} bytes), no numbers; "
+                               "isoflow reads NRRD of a number type")
         _check_data_file(header, path)
         data = nrrd.read_data(header, fh, str(path), index_order="F")
     remember_segments(path, header)  # named after the read (isoflow info --labels's note) from this header

@@ -50,7 +50,15 @@ from ...digital.lattice import DigitalObject
 from ...digital.report import Report
 from ...errors import IsoflowError, check_path, counted, warn
 from ...scale.arrays import NotBinary
-from ...scale.chunks import axis_names, never_written, open_zarr_node, spatial_axes, split_store, unwritten_fill
+from ...scale.chunks import (
+    axis_names,
+    never_written,
+    open_zarr_node,
+    spatial_axes,
+    split_store,
+    stored_order_said,
+    unwritten_fill,
+)
 from .registry import (
     HOLD_4D,
     UDUNITS,
@@ -168,6 +176,7 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
     fill = getattr(array, "fill_value", None)
     blank = unwritten_fill(array, at=at)
     if multiscale is None:
+        stored_order_said(array, where)
         data = data if time is None else data[..., 0]
         # a plain array: isoflow's slab voxeliser (isoflow.mesh.slabs) keeps
         # the grid in the attributes ``pitch`` and ``origin`` (x, y, z order)
@@ -410,6 +419,7 @@ def open_store(path: str | os.PathLike, time: bool = False, channel: bool = Fals
     where = str(path)
     array, multiscale, dataset = open_zarr_node(file, level)
     if multiscale is None:
+        stored_order_said(array, where)
         if channel and array.ndim == 4 and array.shape[3] == 1:
             return StoreArray(array, where, None, None, [0, 1, 2], [3])
         return StoreArray(array, where, None, None, list(range(array.ndim)), [])

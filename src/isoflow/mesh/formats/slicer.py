@@ -422,6 +422,11 @@ def layer_names(header: dict, layer: str | None, where: str) -> dict[int, str] |
 _NAME_LINE = re.compile(rb"(Segment[0-9]+_(?:Name|ID)):=(.*?)\r?", re.DOTALL)
 
 
+#: the field "data file: LIST" of a detached header, after which each line
+#: names one of its data files
+_LIST_LINE = re.compile(rb"data ?file: *LIST\b")
+
+
 def read_header(fh) -> dict:
     r"""A NRRD header as pynrrd reads it from ``fh``, with each segment's
     name and ID (``Segment{k}_Name``, ``Segment{k}_ID``) as 3D Slicer
@@ -456,6 +461,11 @@ def read_header(fh) -> dict:
     lines = [fh.readline()]
     while (line := fh.readline()) and line.rstrip():
         lines.append(line)
+        if _LIST_LINE.match(line):
+            # the format's "data file: LIST": every line after it names a data file, no field;
+            # read as fields they failed as "not enough values to unpack"
+            line = b""
+            break
     header = nrrd.read_header(lines + [line])
     for line in lines[1:]:
         match = _NAME_LINE.fullmatch(line.rstrip(b"\n"))

@@ -17,7 +17,9 @@ command that saves the channels as slices, keeping the voxel size (an
 OME-TIFF's PhysicalSizeX/Y/Z too) and the placement (ImageJ's origin, an
 OME-TIFF's stage position). A file of several image series
 (pages of different shapes, a second stack) is refused: which one is the
-volume is not said by the file.
+volume is not said by the file. A series that the NewSubfileType tag marks
+as a reduced-resolution version of another (a thumbnail or preview stored
+beside the stack) is no image of its own: :func:`full_images` leaves it out.
 
 Grey stored as colour is read as that grey, as a PNG's is: RGB whose three
 channels are equal, or grey, either with an alpha channel where the alpha
@@ -142,12 +144,13 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     with reading(path, "TIFF"), quiet_logs("tifffile") as damage, tifffile.TiffFile(path) as tif:
         if not tif.series:
             raise IsoflowError(f"{where}: a TIFF without an image (damaged, or no pages)")
-        if len(tif.series) > 1:
-            shapes = ", ".join("x".join(map(str, s.shape)) for s in tif.series[:5])
-            raise IsoflowError(f"{where}: holds {len(tif.series)} image series (shapes {shapes}"
-                               f"{', ...' if len(tif.series) > 5 else ''}); isoflow reads one volume: "
-                               + (_pages_as_stack(where) if _one_page_each(tif.series) else "save the stack on its own"))
-        series = tif.series[0]
+        images = full_images(tif.series)
+        if len(images) > 1:
+            shapes = ", ".join("x".join(map(str, s.shape)) for s in images[:5])
+            raise IsoflowError(f"{where}: holds {len(images)} image series (shapes {shapes}"
+                               f"{', ...' if len(images) > 5 else ''}); isoflow reads one volume: "
+                               + (_pages_as_stack(where) if _one_page_each(images) else "save the stack on its own"))
+        series = images[0]
         check_shape(series.shape[::-1], series.dtype, where)  # x first, as the image is read (to_xyz)
         page = series.keyframe
         try:
@@ -512,6 +515,38 @@ def _tag_read(message: str) -> bool:
     tag pointing past the end of the file leaves the pixels whole)."""
     tag = re.search(r"TiffTag (\d+) ", message)
     return tag is None or int(tag.group(1)) in READ_TAGS
+
+
+def full_images(series: list) -> list:
+    """The image series of a TIFF less those its NewSubfileType tag marks
+    as a reduced-resolution version of another image (bit 0: a
+    thumbnail or preview that a microscope or scanner stores beside the
+    stack, as tifffile, scikit-image and Fiji read past it); all of them
+    where every one is so marked.
+
+    Parameters
+    ----------
+    series : list of tifffile.TiffPageSeries
+        ``TiffFile.series``.
+
+    Returns
+    -------
+    list of tifffile.TiffPageSeries
+        Those that are images in their own right, in the file's order.
+
+    Examples
+    --------
+    >>> import io, tifffile
+    >>> buffer = io.BytesIO()
+    >>> with tifffile.TiffWriter(buffer) as tif:
+    ...     tif.write(np.zeros((4, 6, 5), np.uint8), photometric="minisblack")
+    ...     tif.write(np.zeros((2, 2), np.uint8), subfiletype=1)  # a thumbnail
+    >>> with tifffile.TiffFile(io.BytesIO(buffer.getvalue())) as tif:
+    ...     [s.shape for s in tif.series], [s.shape for s in full_images(tif.series)]
+    ([(4, 6, 5), (2, 2)], [(4, 6, 5)])
+    """
+    full = [s for s in series if not int(getattr(s.keyframe, "subfiletype", 0) or 0) & 1]
+    return full or list(series)
 
 
 def _one_page_each(series) -> bool:
