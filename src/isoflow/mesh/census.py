@@ -491,7 +491,7 @@ class _RayScene:
     def __init__(self, kept: np.ndarray, single: np.ndarray) -> None:
         self.tri = np.ascontiguousarray(np.concatenate([kept, single]), dtype=np.float64)
         t = self.tri
-        low = np.minimum(np.minimum(t[:, 0], t[:, 1]), t[:, 2])  # not min(axis=1): a reduce over 3 is slow
+        low = np.minimum(np.minimum(t[:, 0], t[:, 1]), t[:, 2])
         high = np.maximum(np.maximum(t[:, 0], t[:, 1]), t[:, 2])
         self.lo, self.hi = low.min(axis=0), high.max(axis=0)
         self.reach = float(np.max(self.hi - self.lo))
