@@ -231,16 +231,17 @@ def test_voxel_models_with_some_outer_faces_drawn_both_ways_voxelise_as_themselv
     assert np.array_equal(np.load(out)["volume"], np.kron(voxels, np.ones((4, 4, 4), bool)))
 
 
-@pytest.mark.parametrize(("doubled", "seed"), [(0.3, 3), (0.7, 4), (1.0, 7)])
+@pytest.mark.parametrize(("doubled", "seed"), [(0.3, 3), (0.7, 4), (1.0, 7), (1.0, 5)])
 def test_random_voxel_models_with_outer_faces_drawn_both_ways_voxelise_as_themselves(tmp_path, doubled, seed):
     """Random 4^3 voxel models written cube by cube with a share of their
     outer faces (all of them: a mesh of pairs only) also written reversed:
     the command gives the model's own voxels, 4^3 per cube at a quarter of
     a voxel.  Walls and outer pairs that met on edges only pairs use were
     read wrong (of 40 such 3^3 models 38 had wrong voxels; this 1.0 one
-    369 of 4,096).  Not all models of pairs only are right yet: where a
-    hollow in the outline is walled by pairs that no edge decides, seeds
-    5 and 6 still have 128 and 64 wrong (docs/fills.md)."""
+    369 of 4,096).  Where a hollow in the outline was walled by pairs that
+    no edge decides, they were taken for walls (seed 5: 128 wrong); rays
+    decide them now.  A cavity drawn so (seed 6) reads filled, as a cube
+    glued in by walls on all sides would (docs/fills.md)."""
     rng = np.random.default_rng(seed)
     voxels = rng.random((4, 4, 4)) < 0.6
     voxels[0, 0, 0] = voxels[-1, -1, -1] = True  # the grid spans the model's 4^3 box

@@ -16,6 +16,8 @@ import numpy as np
 
 from ..scale.jit import njit
 from ..scale.kernels import find, union
+from .crossing_kernels import segment_crosses_triangle
+from .cube_grid import CubeGrid
 
 #: Fibonacci hashing of a face's vertex set: the key times 2**64 / golden
 #: ratio, top bits
@@ -254,8 +256,11 @@ def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray, mate: np.ndarray 
     decides pairs that meet only pairs on an edge (two outer faces written
     both ways and the wall between their cubes), from those that other
     faces decide or that lie in a plane of the bounding box or another
-    supporting plane (no solid beyond them: no wall); sets still undecided
-    (a closed surface of pairs) are walls.
+    supporting plane (no solid beyond them: no wall).  Sets still
+    undecided (in closed surfaces of pairs) are decided by rays where they
+    can be: a wall has solid on both sides, so an even count of crossings
+    from one side says no wall, odd counts from both sides a wall; those
+    left are walls.
     A pair of zero-area faces (three corners on a line) draws nothing and
     is left as it is.
 
@@ -298,7 +303,7 @@ def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray, mate: np.ndarray 
     q = p[first]
     outer = np.any(np.all(q == lo, axis=1) | np.all(q == hi, axis=1), axis=1)  # in a plane of the bounding box
     outer |= _supporting(q, f[first], p[~flat].reshape(-1, 3), f[~flat].ravel())
-    wall, patch, root = _walls(f[first], f[~paired & ~flat], n_vertices, outer)
+    wall, patch, root = _walls(f[first], f[~paired & ~flat], n_vertices, outer, (q, p[~paired & ~flat]))
     if not (wall | patch).all():
         wall |= _inside_walls(p[first], p[~paired & ~flat], root, ~wall & ~patch)
     drop = paired.copy()
@@ -307,8 +312,8 @@ def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray, mate: np.ndarray 
     return f[~drop], int(len(kept))
 
 
-def _walls(kept: np.ndarray, single: np.ndarray, n_vertices: int,
-           outer: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _walls(kept: np.ndarray, single: np.ndarray, n_vertices: int, outer: np.ndarray,
+           corners: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Which of the ``kept`` faces (one per pair) lie in a wall, which in a
     patch of a surface drawn double-sided, and each one's component.
 
@@ -326,7 +331,8 @@ def _walls(kept: np.ndarray, single: np.ndarray, n_vertices: int,
     number of times: they have a hole there, which one face of each pair
     closes (some faces of a closed model written both ways), where a wall's
     free edges are used by the solids on both of its sides, an even number
-    of times."""
+    of times.  ``corners``: the coordinates of ``kept`` and ``single``
+    (K, 3, 3), for the rays of :func:`_closed_by_parity`."""
     from ..scale.graphs import components
 
     m = len(kept)
@@ -337,7 +343,10 @@ def _walls(kept: np.ndarray, single: np.ndarray, n_vertices: int,
     a, b, face = a[real], b[real], face[real]
     key = np.minimum(a, b) * n + np.maximum(a, b)
     if len(single) == 0:
-        kept_one = _closed_by_parity(m, key, face, np.zeros(len(key), dtype=bool), np.zeros(len(key), dtype=bool), outer)
+        none = np.zeros(len(key), dtype=bool)
+        # with no unpaired face, a pair that the edges leave open is read as one face
+        rays = None if corners is None else (*corners, np.ones(m, np.int8))
+        kept_one = _closed_by_parity(m, key, face, none, none, outer, rays)
         return kept_one == 0, kept_one == 1, edge_table(kept, n_vertices)[5]
     slo, shi, sfwd, sbwd, _, _ = edge_table(single, n_vertices)
     order = np.argsort(slo * n + shi)
@@ -368,7 +377,8 @@ def _walls(kept: np.ndarray, single: np.ndarray, n_vertices: int,
     bare[np.repeat(root, 3)[~reached[kept.ravel()]]] = True
     patch = has_free & ~even_edge
     wall, patch = ((has_free & ~open_edge & ~patch) | (~has_free & ~bare))[root], patch[root]
-    kept_one = _closed_by_parity(m, key, face, covered, odd, outer)
+    rays = None if corners is None else (*corners, np.where(wall, 0, np.where(patch, 1, -1)).astype(np.int8))
+    kept_one = _closed_by_parity(m, key, face, covered, odd, outer, rays)
     return np.where(kept_one < 0, wall, kept_one == 0), np.where(kept_one < 0, patch, kept_one == 1), root
 
 
@@ -387,7 +397,7 @@ def _supporting(q: np.ndarray, kept: np.ndarray, corners: np.ndarray, index: np.
 
 
 def _closed_by_parity(m: int, key: np.ndarray, face: np.ndarray, covered: np.ndarray, odd: np.ndarray,
-                      outer: np.ndarray) -> np.ndarray:
+                      outer: np.ndarray, rays: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Per kept face (one per pair), 1 where its pair is read as one face,
     0 where it is dropped as a wall, -1 where the edges leave it open.
 
@@ -406,8 +416,14 @@ def _closed_by_parity(m: int, key: np.ndarray, face: np.ndarray, covered: np.nda
     or in a supporting plane at its last corner: no solid beyond it) is no
     wall: kept, it decides the walls that meet it where no unpaired face
     is (a model all of whose faces are pairs).  Sheets that the edges
-    leave undecided lie in closed surfaces of pairs: the first is taken
-    for a wall and the rest follow, so the faces left still close."""
+    leave undecided lie in closed surfaces of pairs; where ``rays`` are
+    given (the kept faces' and the unpaired faces' coordinates, and what
+    becomes of each kept face where the edges leave its sheet open: 0
+    dropped, 1 kept, -1 not known), rays decide what they can
+    (:func:`_told_by_rays`), and the edges then what follows, round after
+    round.  Of those still undecided the
+    first is taken for a wall and the rest follow, so the faces left still
+    close."""
     from ..scale.graphs import components
 
     o = np.lexsort((face, key))
@@ -436,21 +452,202 @@ def _closed_by_parity(m: int, key: np.ndarray, face: np.ndarray, covered: np.nda
     rhs = eodd[eqstart].astype(np.int8)
     on_box = np.zeros(n_sheets, dtype=bool)
     on_box[sheet[outer]] = True
-    value = _unit_parity(np.r_[0, np.cumsum(eqsize)].astype(np.int64), es[np.repeat(eq, esize)].astype(np.int64), rhs,
-                         open_sheet, on_box & ~open_sheet)
-    return value[sheet]
+    seed = np.where(on_box & ~open_sheet, 1, -1).astype(np.int8)
+    equations = (np.r_[0, np.cumsum(eqsize)].astype(np.int64), es[np.repeat(eq, esize)].astype(np.int64), rhs, open_sheet)
+    if rays is not None:
+        value, guessed = _unit_parity(*equations, seed, False)
+        scene = None
+        for _ in range(RAY_ROUNDS):
+            if not guessed.any():
+                break
+            scene = scene or _RayScene(rays[0], rays[1])
+            told = _told_by_rays(scene, rays[2], sheet, value, guessed)
+            if not (told >= 0).any():
+                break
+            seed = np.where(told >= 0, told, value).astype(np.int8)
+            value, guessed = _unit_parity(*equations, seed, False)
+    return _unit_parity(*equations, seed, True)[0][sheet]
+
+
+#: rounds of rays (:func:`_told_by_rays`) and the edges' consequences, at
+#: most: each round casts a few rays from every sheet still undecided
+RAY_ROUNDS = 16
+#: the most faces the rays of one round look at, per face of the mesh and
+#: at least: past it the round's other rays tell nothing (those sheets keep
+#: the rule without rays), so that a round costs about a pass over the
+#: mesh (a model of 188k faces written cube by cube leaves 35k sheets of
+#: walls to the rule, whose rays all stop at the next wall)
+RAY_WORK = 8, 1 << 16
+#: kept faces per undecided sheet that rays start from, spread over it
+RAY_FACES = 2
+
+
+class _RayScene:
+    """What the rays of :func:`_told_by_rays` look at, round after round:
+    the kept faces (one per pair) and then the unpaired faces, as corner
+    coordinates (K, 3, 3), their box and the grid of cubes that holds
+    them (:class:`~isoflow.mesh.cube_grid.CubeGrid`)."""
+
+    def __init__(self, kept: np.ndarray, single: np.ndarray) -> None:
+        self.tri = np.ascontiguousarray(np.concatenate([kept, single]), dtype=np.float64)
+        t = self.tri
+        low = np.minimum(np.minimum(t[:, 0], t[:, 1]), t[:, 2])
+        high = np.maximum(np.maximum(t[:, 0], t[:, 1]), t[:, 2])
+        self.lo, self.hi = low.min(axis=0), high.max(axis=0)
+        self.reach = float(np.max(self.hi - self.lo))
+        self.grid = CubeGrid(low, high, compiled=True)
+
+
+def _told_by_rays(scene: _RayScene, fate: np.ndarray, sheet: np.ndarray, value: np.ndarray,
+                  todo: np.ndarray) -> np.ndarray:
+    """Per sheet, 1 where rays show it is no wall (a patch, read as one
+    face), 0 where they show a wall, -1 where they do not tell.
+
+    A wall lies between solids: the faces left bound solid on both of its
+    sides.  A patch is part of those faces, which change sides across it.
+    From a point of a kept face of a ``todo`` sheet (a few faces of each)
+    a ray along each axis the face is not parallel to, away from one side,
+    counts its crossings with the faces decided so far: the unpaired
+    faces, the pairs of decided sheets (``value``) read as one face (kept)
+    or none (wall), and those of sheets the edges leave open as ``fate``
+    says (per kept face: 1 kept, 0 dropped, -1 not known).  Where it
+    crosses no face of an undecided sheet and touches no face at an edge,
+    a corner or in its plane (exact signs, or certified float64:
+    :func:`~isoflow.mesh.crossing_kernels.segment_crosses_triangle`), the
+    count's parity is that of the faces left just off that side: odd
+    inside their solid, even outside.  An even count on either side: no
+    wall.  Odd on both sides: a wall.  A side told both ways (faces that
+    do not close) tells nothing."""
+    n_sheets = len(value)
+    faces = np.flatnonzero(todo[sheet])
+    if len(faces) == 0:
+        return np.full(n_sheets, -1, np.int8)
+    # up to RAY_FACES faces of each sheet, spread over its faces in file
+    # order (neighbours in a file are often neighbours on the surface)
+    faces = faces[np.argsort(sheet[faces], kind="stable")]
+    s = sheet[faces]
+    begin = np.flatnonzero(np.r_[True, s[1:] != s[:-1]])
+    size = np.diff(np.r_[begin, len(s)])
+    rays = np.minimum(size, RAY_FACES)
+    group = np.repeat(np.arange(len(begin)), rays)
+    step = np.arange(len(group)) - np.repeat(np.cumsum(rays) - rays, rays)
+    faces = faces[begin[group] + step * size[group] // rays[group]]
+    kept = scene.tri[:len(sheet)]
+    normal = np.cross(kept[faces, 1] - kept[faces, 0], kept[faces, 2] - kept[faces, 0])
+    # a point inside each face, away from its edges and from the lines
+    # that split a square into two triangles; on an axis-aligned face it
+    # lies on the face exactly (the normal's coordinate is a corner's)
+    t = kept[faces]
+    start = t[:, 0] + 0.3141 * (t[:, 1] - t[:, 0]) + 0.2113 * (t[:, 2] - t[:, 0])
+    face_of, axis = np.nonzero(normal != 0)
+    face_of, axis = np.repeat(face_of, 2), np.repeat(axis, 2)
+    direction = np.tile([1, -1], len(axis) // 2)
+    side = np.sign(normal[face_of, axis]).astype(np.int64) * direction
+    origin = start[face_of]
+    end = origin.copy()
+    rows = np.arange(len(axis))
+    lo, hi = scene.lo, scene.hi
+    with np.errstate(over="ignore", invalid="ignore"):
+        end[rows, axis] = np.where(direction > 0, hi[axis] + scene.reach, lo[axis] - scene.reach)
+    # an end not beyond every face (the mesh far from the origin) touches one: such rays tell nothing
+    beyond = np.where(direction > 0, end[rows, axis] > hi[axis], end[rows, axis] < lo[axis]) & np.isfinite(end).all(axis=1)
+    known = np.where(todo[sheet], -1, fate)  # an open sheet's pairs: as they will be read
+    weight = np.ones(len(scene.tri), np.int8)
+    weight[:len(sheet)] = np.where(value[sheet] >= 0, value[sheet], known)
+    g = scene.grid
+    parity = _ray_parities(scene.tri, weight, origin, end, axis.astype(np.int64), faces[face_of].astype(np.int64),
+                           g.origin, float(g.cube), g.dims.astype(np.int64), g.start, g.size, g.key, g.box,
+                           RAY_WORK[0] * len(scene.tri) + RAY_WORK[1])
+    parity[~beyond] = -1
+    # per sheet, side (the one the kept face faces, the other) and parity: seen?
+    ok = parity >= 0
+    seen = np.zeros((4, n_sheets), bool)
+    seen[(2 * (side[ok] < 0) + parity[ok]), sheet[faces[face_of[ok]]]] = True
+    even_front, odd_front, even_back, odd_back = seen
+    sure = todo & ~(even_front & odd_front) & ~(even_back & odd_back)  # no side seen both ways
+    told = np.full(n_sheets, -1, np.int8)
+    told[sure & (even_front | even_back)] = 1
+    told[sure & odd_front & odd_back & ~even_front & ~even_back] = 0
+    return told
 
 
 @njit(cache=True, nogil=True)
-def _unit_parity(eq_start, eq_sheet, rhs, frozen, outer):
+def _ray_parities(tri, weight, ray_from, ray_to, ray_axis, ray_own, origin, cube, dims, start, size, key, box, budget):
+    # ray r runs from ray_from[r] to ray_to[r] along axis ray_axis[r],
+    # beside its own triangle ray_own[r]. Each ray's crossings with the
+    # triangles of weight 1, mod 2; -1 where it crosses or touches one of
+    # weight -1, or touches one of weight 1 (weight 0: not there). Each ray
+    # walks the grid's cubes (CubeGrid: the triangles of each cube from
+    # start, size) from its start and stops at the first triangle that
+    # stops it; past ``budget`` triangles looked at, the rays left are -1
+    n_rays = len(ray_from)
+    parity = np.zeros(n_rays, np.int64)
+    seen = np.full(len(weight), -1, np.int64)  # the last ray that looked at each triangle
+    cubes = key[start]
+    c = np.empty(3, np.int64)
+    x = np.empty((5, 3))  # the triangle's corners, the ray's start and end
+    work = 0
+    for r in range(n_rays):
+        if work > budget:
+            parity[r] = -1
+            continue
+        k = ray_axis[r]
+        i, j = (k + 1) % 3, (k + 2) % 3
+        step = 1 if ray_to[r, k] > ray_from[r, k] else -1
+        for m in range(3):
+            c[m] = min(dims[m] - 1, max(0, np.int64(np.floor((ray_from[r, m] - origin[m]) / cube))))
+            x[3, m], x[4, m] = ray_from[r, m], ray_to[r, m]
+        last = dims[k] - 1 if step > 0 else 0
+        lo_k, hi_k = min(x[3, k], x[4, k]), max(x[3, k], x[4, k])
+        pi, pj = x[3, i], x[3, j]
+        stopped = False
+        while True:
+            here = (c[2] * dims[1] + c[1]) * dims[0] + c[0]
+            g = np.searchsorted(cubes, here)
+            if g < len(cubes) and cubes[g] == here:
+                for e in range(start[g], start[g] + size[g]):
+                    t = box[e]
+                    work += 1
+                    if seen[t] == r or weight[t] == 0 or t == ray_own[r]:
+                        continue
+                    seen[t] = r
+                    if (max(tri[t, 0, i], tri[t, 1, i], tri[t, 2, i]) < pi or min(tri[t, 0, i], tri[t, 1, i], tri[t, 2, i]) > pi
+                            or max(tri[t, 0, j], tri[t, 1, j], tri[t, 2, j]) < pj
+                            or min(tri[t, 0, j], tri[t, 1, j], tri[t, 2, j]) > pj
+                            or max(tri[t, 0, k], tri[t, 1, k], tri[t, 2, k]) < lo_k
+                            or min(tri[t, 0, k], tri[t, 1, k], tri[t, 2, k]) > hi_k):
+                        continue
+                    for m in range(3):
+                        for n in range(3):
+                            x[m, n] = tri[t, m, n]
+                    s = segment_crosses_triangle(x, 3, 4, 0, 1, 2)
+                    if s == 0:
+                        continue
+                    if s == 1 and weight[t] == 1:
+                        parity[r] ^= 1
+                    else:
+                        stopped = True
+                        break
+            if stopped or c[k] == last:
+                break
+            c[k] += step
+        if stopped:
+            parity[r] = -1
+    return parity
+
+
+@njit(cache=True, nogil=True)
+def _unit_parity(eq_start, eq_sheet, rhs, frozen, given, guess):
     # each equation: its sheets' values and rhs sum to an even number; a
-    # sheet alone in one takes its value, an outer sheet is kept, and then
-    # the last unknown sheet of every equation takes its value (the first
-    # value kept); where every equation left has two unknowns or more, the
-    # first sheet left is a wall and the rest follow from it
+    # sheet alone in one takes its value, a given value (an outer sheet,
+    # kept; one that rays told) is taken, and then the last unknown sheet
+    # of every equation takes its value (the first value kept); where every
+    # equation left has two unknowns or more, with ``guess`` the first sheet
+    # left is a wall and the rest follow from it. Returns the values and
+    # the sheets left to guess (none with ``guess``)
     n = len(frozen)
     value = np.full(n, -1, np.int8)
-    seed = np.where(outer, np.int8(1), np.int8(-1))
+    seed = given.copy()
     clash = frozen.copy()
     n_eq = len(eq_start) - 1
     for e in range(n_eq):
@@ -499,8 +696,8 @@ def _unit_parity(eq_start, eq_sheet, rhs, frozen, outer):
                             top += 1
         while nxt < n and (value[nxt] >= 0 or clash[nxt] or count[nxt + 1] == count[nxt]):
             nxt += 1
-        if nxt == n:
-            return value
+        if nxt == n or not guess:
+            return value, (value < 0) & ~clash & (count[1:] > count[:-1])
         value[nxt] = 0  # no edge tells it: a wall, dropped (the union)
         stack[top] = nxt
         top += 1

@@ -170,6 +170,40 @@ def _segment_meets_triangle(x, n, p, q, t0, t1, t2, k, sp, sq):
 
 
 @njit(cache=True, nogil=True)
+def segment_crosses_triangle(x, p, q, t0, t1, t2):
+    """Whether the segment ``p q`` crosses the triangle ``t0 t1 t2`` (point
+    indices into ``x``) at one point of its inside, away from its edges
+    and corners, with neither end on its plane: 1; 0 where the segment
+    misses the closed triangle; :data:`UNDECIDED` where it touches it
+    otherwise (through an edge or a corner, an end on it, in its plane)
+    or a sign is not certified. A ray cast to count crossings takes 1
+    and 0 as they are and gives up on the rest.
+
+    Examples
+    --------
+    >>> x = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.2, 0.2, -1], [0.2, 0.2, 1], [1, 1, 1]], float)
+    >>> int(segment_crosses_triangle(x, 3, 4, 0, 1, 2)), int(segment_crosses_triangle(x, 4, 5, 0, 1, 2))
+    (1, 0)
+    """
+    # the line through p and q misses the closed triangle where two of
+    # these signs are opposite, and meets its inside where all three agree;
+    # the line first, so that a triangle beside the line whose plane passes
+    # near an end (one in the plane of the face the ray starts from) is no
+    # question
+    s1, s2, s3 = _o3(x, None, p, q, t0, t1), _o3(x, None, p, q, t1, t2), _o3(x, None, p, q, t2, t0)
+    if ((s1 == 1 or s2 == 1 or s3 == 1) and (s1 == -1 or s2 == -1 or s3 == -1)):
+        return 0
+    if s1 == UNDECIDED or s2 == UNDECIDED or s3 == UNDECIDED:
+        return UNDECIDED
+    sp, sq = _o3(x, None, t0, t1, t2, p), _o3(x, None, t0, t1, t2, q)
+    if sp == sq and sp != 0 and sp != UNDECIDED:
+        return 0  # both ends on one side
+    if sp == UNDECIDED or sq == UNDECIDED or sp == 0 or sq == 0 or s1 == 0 or s2 == 0 or s3 == 0:
+        return UNDECIDED
+    return 1
+
+
+@njit(cache=True, nogil=True)
 def _pair(x, n, tri, axis, fa, fb):
     """0, 1 or UNDECIDED: whether faces ``fa`` and ``fb`` cross."""
     shared = 0
@@ -299,7 +333,7 @@ def face_axes(x, n, tri, axis, undecided):
 def cube_entries(cl, ch, dims, box, key):
     """Each box's cubes (from its lowest ``cl`` to its highest ``ch``, x
     fastest) into ``box`` (the box's number) and ``key`` (the cube's, as
-    :meth:`isoflow.mesh.crossings.CubeGrid.cube_key`), box after box."""
+    :meth:`isoflow.mesh.cube_grid.CubeGrid.cube_key`), box after box."""
     e = 0
     for i in range(len(cl)):
         for z in range(cl[i, 2], ch[i, 2] + 1):

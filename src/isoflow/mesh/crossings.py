@@ -33,21 +33,18 @@ a crossing.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
 
 from ..scale.compiled import have_numba
+from .cube_grid import CubeGrid
 from .load import distinct_rows
 from .predicates import ExactPoints
 
 #: from this many faces on, ``method="auto"`` takes the compiled pass
 COMPILED_FACES = 2000
-
-#: candidate pairs handled at once (memory: about 200 bytes each)
-CHUNK_PAIRS = 1 << 21
 
 
 def crossing_pairs(vertices: np.ndarray, faces: np.ndarray,
@@ -333,94 +330,6 @@ def projection_axis(exact: ExactPoints, tri: np.ndarray) -> np.ndarray:
     axis = np.argmax(normal, axis=1)
     axis[~np.any(signs != 0, axis=1)] = -1
     return axis
-
-
-class CubeGrid:
-    """Closed boxes ``[lo, hi]`` hashed into a grid of cubes about the size
-    of a typical box: ``box`` (box numbers) sorted by ``key`` (their cubes),
-    the cubes' ``start`` and ``size`` in it, each box's lowest cube ``cl``.
-    A pair of overlapping boxes belongs to the one cube that holds the lower
-    corner of their common box, so no pair is seen twice."""
-
-    def __init__(self, lo: np.ndarray, hi: np.ndarray, compiled: bool = False) -> None:
-        self.lo, self.hi = lo, hi
-        cl, ch = _grid_cells(lo, hi)
-        if compiled:
-            self._compiled(cl, ch)
-            return
-        span = ch - cl + 1
-        count = np.prod(span, axis=1)
-        box = np.repeat(np.arange(len(lo)), count)
-        local = np.arange(len(box)) - np.repeat(np.cumsum(count) - count, count)
-        sx, sy = span[box, 0], span[box, 1]
-        cell = cl[box] + np.stack([local % sx, (local // sx) % sy, local // (sx * sy)], axis=1)
-        self.dims = ch.max(axis=0) + 1
-        key = self.cube_key(cell)
-        order = np.argsort(key, kind="stable")
-        self.box, self.key, self.cl = box[order], key[order], cl
-        self.start = np.flatnonzero(np.r_[True, self.key[1:] != self.key[:-1]])
-        self.size = np.diff(np.r_[self.start, len(self.key)])
-
-    def _compiled(self, cl: np.ndarray, ch: np.ndarray) -> None:
-        """The same arrays from the compiled kernels: the cubes listed box
-        by box and sorted by a radix sort (stable, as the NumPy pass)."""
-        from .crossing_kernels import cube_entries, runs, sort_by_key
-
-        self.cl = cl
-        self.dims = ch.max(axis=0) + 1
-        total = int(np.prod(ch - cl + 1, axis=1).sum())
-        box = np.empty(total, np.int64)
-        key = np.empty(total, np.int64)
-        cube_entries(cl, ch, self.dims, box, key)
-        self.key, self.box = sort_by_key(key, box, int(np.prod(self.dims) - 1).bit_length())
-        self.start, self.size = runs(self.key)
-
-    def cube_key(self, cell: np.ndarray) -> np.ndarray:
-        """One integer per cube (x fastest)."""
-        return (cell[:, 2] * self.dims[1] + cell[:, 1]) * self.dims[0] + cell[:, 0]
-
-    def pairs(self) -> Iterator[np.ndarray]:
-        """Pairs ``(i, j)``, ``i < j``, of the boxes that overlap, in chunks."""
-        after = np.repeat(self.start + self.size, self.size) - np.arange(len(self.key)) - 1
-        lo, hi = self.lo, self.hi
-        for first, second in _index_pairs(after):
-            i, j = self.box[first], self.box[second]
-            mine = self.cube_key(np.maximum(self.cl[i], self.cl[j])) == self.key[first]
-            meet = np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1)
-            keep = mine & meet
-            yield np.stack([np.minimum(i, j)[keep], np.maximum(i, j)[keep]], axis=1)
-
-
-def _grid_cells(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The lowest and highest grid cube of each box, for a cube size that
-    puts each box in a few cubes on average (doubled until it does)."""
-    origin = lo.min(axis=0)
-    extent = float(np.max(hi.max(axis=0) - origin))
-    if not extent > 0:
-        zero = np.zeros(lo.shape, np.int64)
-        return zero, zero
-    size = max(float(np.median(np.max(hi - lo, axis=1))), extent / 2**20)
-    while True:
-        cl = np.floor((lo - origin) / size).astype(np.int64)
-        ch = np.floor((hi - origin) / size).astype(np.int64)
-        if np.prod(ch - cl + 1, axis=1).sum() <= 8 * len(lo) + 1024 or size >= extent:
-            return cl, ch
-        size *= 2
-
-
-def _index_pairs(after: np.ndarray) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-    """``(first, second)`` index arrays: each entry ``k`` with each of the
-    ``after[k]`` entries that follow it, at most :data:`CHUNK_PAIRS` a chunk."""
-    ends = np.cumsum(after)
-    lo = 0
-    while lo < len(after):
-        hi = int(np.searchsorted(ends, ends[lo - 1] + CHUNK_PAIRS if lo else CHUNK_PAIRS, side="right"))
-        hi = max(hi, lo + 1)
-        n = after[lo:hi]
-        first = np.repeat(np.arange(lo, hi), n)
-        offset = np.arange(len(first)) - np.repeat(np.cumsum(n) - n, n)
-        yield first, first + 1 + offset
-        lo = hi
 
 
 def _cross(exact: ExactPoints, tri: np.ndarray, axis: np.ndarray, pairs: np.ndarray) -> np.ndarray:

@@ -26,7 +26,8 @@ import numpy as np
 from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
 from ..errors import IsoflowError, check_callable, check_switch, counted, given_text, scalar_given, whole_given
 from ..scale import memory
-from .crossings import CubeGrid, find_crossings
+from .crossings import find_crossings
+from .cube_grid import CubeGrid
 from .fills import Fill, Voxelization, check_fill, check_strict
 from .grid import GridTooLarge, finest_fit, float64_rounding, grid_fits, grid_need, grid_words, near_origin
 from .load import MeshInput, check_mesh, mesh_defects, mesh_input, repeated_faces
@@ -557,7 +558,7 @@ def lens_of(overlap) -> tuple[float, np.ndarray]:
 
 def _boxes_meeting(solids: list) -> np.ndarray:
     """Pairs ``(i, j)``, ``i < j``, in order, of the solids whose bounding
-    boxes meet: found through a grid of cubes (:class:`~isoflow.mesh.crossings.CubeGrid`)
+    boxes meet: found through a grid of cubes (:class:`~isoflow.mesh.cube_grid.CubeGrid`)
     rather than by testing every pair, whose table grows with the square
     of the components (gigabytes for a mesh of twenty thousand boxes)."""
     if len(solids) < 2:
