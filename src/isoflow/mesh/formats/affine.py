@@ -102,7 +102,10 @@ def plane_off_axes(rows, centre0, where: str) -> str:
 
     Examples
     --------
-    >>> print(plane_off_axes([1, 2], [5.0, -10.0, 20.0], "sagittal.nii.gz"))
+    >>> import warnings
+    >>> with warnings.catch_warnings():  # the warning given is also returned
+    ...     warnings.simplefilter("ignore")
+    ...     print(plane_off_axes([1, 2], [5.0, -10.0, 20.0], "sagittal.nii.gz"))
     sagittal.nii.gz: a 2D image in the world's y-z plane: read with world y and z as its x and y, so its \
 coordinates are world y and z (not its frame's x and y), and its place at world x = 5 is not kept
     """
