@@ -361,3 +361,13 @@ def test_a_header_names_only_the_columns_its_file_holds(tmp_path, capsys, suffix
     raw = trimesh.load(out, process=False).metadata.get("_ply_raw")  # an OBJ has no columns beside x y z
     held = raw is not None and "gamma" in raw["vertex"]["data"].dtype.names
     assert named == held == (suffix == ".ply"), comments
+
+
+def test_an_obj_of_an_input_named_with_a_line_break_is_lines_of_obj_keywords(tmp_path, capsys):
+    # the name's line break ended the comment: its rest was a line of no OBJ keyword
+    isoflow.write_volume(object_with_contacts(), tmp_path / "in\nput.npz")
+    out = tmp_path / "s.obj"
+    assert main(["surface", str(tmp_path / "in\nput.npz"), "-o", str(out), "-q"]) == 0
+    lines = out.read_text().splitlines()
+    assert all(line.split()[0] in ("#", "v", "f") for line in lines), [x for x in lines if x[:1] not in "#vf"]
+    assert any(line.startswith("# isoflow surface of in put.npz, 6-connectivity") for line in lines)

@@ -395,7 +395,8 @@ def write_obj(
     d = _digits(vertices, step)
     with atomic_write(path, "w", sync=sync) as fh:
         for c in comments:
-            fh.write(f"# {c}\n")
+            # a comment is one line: an input named with a line break left its rest a line of no OBJ keyword
+            fh.write(f"# {' '.join(c.split())}\n")
         write_rows(fh, np.asarray(vertices, np.float64).reshape(-1, 3), f"v %.{d}g %.{d}g %.{d}g\n")
         for size, rows in _size_groups(faces):
             write_rows(fh, rows + 1, "f" + " %d" * size + "\n")
