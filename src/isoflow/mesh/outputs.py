@@ -59,6 +59,9 @@ def check_output_path(
     if path.is_dir():  # --force must not mean "replace a directory"
         raise IsoflowError(f"{path}: is a directory; give a file name for the {what}")
     if suffixes and path.suffix.lower() not in suffixes:
+        if str(path) == "-":  # the shell's convention for stdout, which no file is streamed to
+            raise IsoflowError(f"-: a {what} is written to a file, not to stdout; give its name, e.g. "
+                               f"{what.split()[-1]}{suffixes[0]}")
         if path.name.lower() in suffixes:  # ".ply" (an empty $name in "$name.ply"): a hidden name of no suffix
             raise IsoflowError(f"{path}: is a suffix alone, with no name before it; give the file's name, e.g. "
                                f"{path.with_name(what.split()[-1] + path.name)}")
