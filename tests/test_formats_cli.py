@@ -2255,3 +2255,19 @@ def test_a_4d_array_of_channels_is_not_called_a_time_series(tmp_path, command):
     subprocess.run(sys.executable + line[len("python"):], shell=True, check=True, cwd=tmp_path)
     with np.load(tmp_path / "t0.npz") as saved:
         assert saved[saved.files[0]].shape == rgb.shape[:3]
+
+
+def test_a_zero_pixdim_of_a_nifti_without_forms_is_said_to_be_read_as_1(tmp_path, capsys, labels):
+    """pixdim[1] = 0 with qform and sform codes 0: no voxel size. nifti1_io
+    and nibabel read it as 1, and so did isoflow, in silence: the mesh was
+    1 wide a voxel along x where the file gives no width. The warning line
+    now names it; the mesh is where nifti1_io places the voxels."""
+    path = tmp_path / "bare.nii"
+    bare_nifti(path, labels, (0.0, 1.5, 1.0))
+    assert main(["surface", str(path), "--label", "3", "-o", str(tmp_path / "s.ply")]) == 0
+    warned = capsys.readouterr().err
+    assert "pixdim[1] 0, no voxel size: read as 1, as nibabel and nifti1_io do" in warned, warned
+    assert len(warned.splitlines()) == 1, warned
+    np.save(tmp_path / "label3.npy", labels == 3)
+    run(capsys, "surface", tmp_path / "label3.npy", "-o", tmp_path / "n.ply")
+    same_points(ply_vertices(tmp_path / "s.ply"), (ply_vertices(tmp_path / "n.ply") - 0.5) * [1.0, 1.5, 1.0])

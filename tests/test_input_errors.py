@@ -1399,3 +1399,12 @@ def test_a_valid_archive_without_a_mesh_says_what_it_holds(tmp_path, members, wo
     assert "not a valid ZIP file" not in lines[0]
     for w in words:
         assert w in lines[0], (w, lines[0])
+
+
+@pytest.mark.parametrize("given", ["1e400", "-inf", "nan"])
+def test_a_label_that_is_no_finite_number_says_finite(tmp_path, capsys, given):
+    # "label must be a number, got inf" of --label 1e400, which is one
+    np.save(tmp_path / "v.npy", np.ones((2, 2, 2), np.uint8))
+    fails(capsys, "surface", tmp_path / "v.npy", f"--label={given}", "-o", tmp_path / "s.ply",
+          words=("v.npy: label must be a finite number, got",))
+    assert not (tmp_path / "s.ply").exists()

@@ -2180,3 +2180,16 @@ def test_every_line_of_surface_labels_names_its_directory_as_dir_slash(tmp_path)
     for k in (1, 2):  # a box each: a closed surface, V - E + F = 2
         mesh = trimesh.load(tmp_path / "d2" / f"label_{k}.ply", process=False)
         assert mesh.is_watertight and mesh.euler_number == 2
+
+
+def test_surface_labels_files_name_their_input_by_its_file_name_as_surface_does(tmp_path, capsys, segmentation):
+    # the scene's record held the input as given, its whole directory path with it (/home/.../seg.npy),
+    # where every other file names the input's file alone
+    import struct
+
+    np.save(tmp_path / "seg.npy", segmentation)
+    run(capsys, "surface", tmp_path / "seg.npy", "--labels", "4,9", "--connectivity", "26", "-o", tmp_path / "s.glb")
+    data = (tmp_path / "s.glb").read_bytes()
+    size = struct.unpack("<I", data[12:16])[0]  # the glTF JSON chunk (glTF 2.0 binary container)
+    records = {m["extras"]["isoflow"] for m in json.loads(data[20:20 + size])["meshes"]}
+    assert records == {"isoflow surface --labels of seg.npy, 26-connectivity"}

@@ -288,6 +288,21 @@ def test_analyze_is_read_with_its_voxel_sizes_as_stored(tmp_path, capsys, aseg):
     assert line.endswith("its content is NIfTI, not Analyze: rename it single.nii"), line
 
 
+def test_an_analyze_voxel_size_of_0_is_said_to_be_read_as_1(tmp_path, capsys):
+    # nibabel reads pixdim[2] = 0 as 1, and the surface was 1 thick a voxel along y in silence
+    box = np.zeros((4, 5, 6), np.uint8)
+    box[1:3, 1:4, 2:5] = 1
+    nib.save(nib.AnalyzeImage(box, np.diag([2.0, 3.0, 0.5, 1.0])), tmp_path / "box.hdr")
+    header = bytearray((tmp_path / "box.hdr").read_bytes())
+    header[84:88] = np.float32(0).tobytes()  # dbh.h: float pixdim[8] at byte 76, pixdim[2] 8 bytes on
+    (tmp_path / "box.hdr").write_bytes(bytes(header))
+    assert main(["surface", str(tmp_path / "box.hdr"), "-o", str(tmp_path / "s.ply"), "-q"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.rstrip().endswith("; pixdim[2] 0, no voxel size: read as 1, as nibabel does"), err
+    m = trimesh.load(tmp_path / "s.ply", process=False)
+    assert m.bounds.tolist() == [[2.0, 1.0, 1.0], [6.0, 4.0, 2.5]]  # voxel 0's corner at 0, sizes 2, 1, 0.5
+
+
 @pytest.mark.parametrize("pitch", [0.5, 0.3])
 @pytest.mark.parametrize("suffix", [".mgz", ".nii.gz"])
 def test_an_origin_that_float32_holds_reads_back_exactly(tmp_path, capsys, suffix, pitch):

@@ -455,3 +455,20 @@ def test_flow_out_named_as_its_table_names_the_directory_that_writes_it(tmp_path
     assert f"give --out {tmp_path / 'flow'} (--out {tmp_path / 'flow'} writes {tmp_path / 'flow'}/flow.csv)" in p.stderr
     assert "step_NNN.ply in 3D" in p.stderr, p.stderr
     assert sorted(os.listdir(tmp_path)) == ["disc.png"]
+
+
+@pytest.mark.parametrize(("output", "words"), [
+    (("-o", "out"), "out: is a directory; give a file name for the surface"),
+    (("-o", ".ply"), ".ply: is a suffix alone, with no name before it; give the file's name, e.g. surface.ply"),
+    (("-o", "-"), "-: a surface is written to a file, not to stdout; give its name, e.g. surface.ply"),
+    (("-o", "s.ply", "--png", ".png"), ".png: is a suffix alone, with no name before it; give the file's name, "
+                                       "e.g. picture.png"),
+])
+def test_a_surface_into_a_directory_or_a_bare_suffix_says_which(tmp_path, monkeypatch, output, words):
+    # each was "surface must end in .ply or .obj or .stl or .glb", which the name ".ply" does
+    monkeypatch.chdir(tmp_path)
+    np.save("v.npy", np.ones((2, 2, 2), bool))
+    (tmp_path / "out").mkdir()
+    p = run_here("surface", "v.npy", *output, "--force", "-q")
+    assert p.returncode == 2 and p.stderr == f"isoflow surface: error: {words}\n", p.stderr
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["out", "v.npy"]

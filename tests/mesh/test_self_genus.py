@@ -147,3 +147,47 @@ def test_genus_reads_a_file_at_the_connectivity_it_was_written(tmp_path, capsys,
     assert "written_connectivity" not in [n["kind"] for n in asked["notes"]]
     # the Python default reads the file as the command line does
     assert [d["betti"] for d in verify_genus(out, resolutions=[8, 16], step=False).digital] == [betti(vol, 26)] * 2
+
+
+@pytest.mark.parametrize("suffix", ["ply", "obj", "stl", "glb"])
+def test_genus_reads_each_label_file_at_the_connectivity_it_was_written(tmp_path, capsys, suffix):
+    # surface --labels -o DIR/ recorded no connectivity in its files: genus
+    # read a 26-connected label's surface 6-connected
+    import json
+
+    from isoflow.cli import main
+
+    vol = random_volume(3)
+    np.save(tmp_path / "seg.npy", vol.astype(np.uint8) * 5)
+    assert main(["surface", str(tmp_path / "seg.npy"), "--labels", "--connectivity", "26", "-o", f"{tmp_path}/out/",
+                 "--suffix", suffix, "-q"]) == 0
+    capsys.readouterr()
+    assert main(["genus", str(tmp_path / "out" / f"label_5.{suffix}"), "--resolution", "8", "--no-step", "--json",
+                 "-q"]) == 0
+    found = json.loads(capsys.readouterr().out)
+    assert [(d["connectivity"], d["betti"]) for d in found["digital"]] == [(26, betti(vol, 26))]
+
+
+def test_genus_reads_an_stl_of_a_long_name_at_the_connectivity_it_was_written(tmp_path, capsys):
+    # the 80-byte header cut "26-connectivity" off after a long input name
+    import json
+
+    from isoflow.cli import main
+
+    vol = random_volume(4)
+    name = tmp_path / ("subject_0001_session_02_acquisition_t1w_" * 2 + "mask.npy")
+    np.save(name, vol)
+    out = tmp_path / "s.stl"
+    assert main(["surface", str(name), "--connectivity", "26", "-o", str(out), "-q"]) == 0
+    capsys.readouterr()
+    assert main(["genus", str(out), "--resolution", "8", "--no-step", "--json", "-q"]) == 0
+    found = json.loads(capsys.readouterr().out)
+    assert [(d["connectivity"], d["betti"]) for d in found["digital"]] == [(26, betti(vol, 26))]
+    assert trimesh_header(out).startswith("isoflow surface of subject_0001_")
+
+
+def trimesh_header(path) -> str:
+    """An STL's 80-byte header as trimesh reads it."""
+    import trimesh
+
+    return trimesh.load(path, process=False).metadata["header"]

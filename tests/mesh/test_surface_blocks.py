@@ -554,3 +554,19 @@ def test_an_stl_block_holds_little_beside_its_mesh(tmp_path, monkeypatch):
     mesh, held, peak = max(got, key=lambda g: len(g[0].faces))
     triangles = len(triangle_rows(mesh.faces, mesh.edge_midpoint)[0])
     assert triangles > 50_000 and (peak - held) / triangles < 481 / 4
+
+
+def test_a_path_or_an_object_given_for_the_array_says_what_to_pass(tmp_path):
+    # a store's path (as the command takes it) ended in AttributeError: 'str' object has no attribute 'shape'
+    vol = np.zeros((4, 4, 4), bool)
+    vol[1:3, 1:3, 1:3] = True
+    zarr.open_array(tmp_path / "v.zarr", mode="w", shape=vol.shape, dtype=bool)[:] = vol
+    with pytest.raises(IsoflowError, match=r"v\.zarr: a path, not an array; read it with zarr\.open_array"):
+        write_surface_blocks(str(tmp_path / "v.zarr"), tmp_path / "a.ply", scheduler="sync")
+    with pytest.raises(IsoflowError, match=r"a DigitalObject, not an array; pass its \.volume \(and frame=obj"):
+        write_surface_blocks(DigitalObject(vol), tmp_path / "b.ply", scheduler="sync")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["v.zarr"]
+    # nested lists are array-like: the 2x2x2 cube, 26 corners and 24 quads, as trimesh reads them
+    write_surface_blocks(vol.tolist(), tmp_path / "c.ply", scheduler="sync")
+    m = trimesh.load(tmp_path / "c.ply", process=False)
+    assert (len(m.vertices), len(m.faces), bool(m.is_watertight), float(m.volume)) == (26, 48, True, 8.0)

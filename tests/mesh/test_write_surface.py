@@ -348,3 +348,26 @@ def test_an_obj_that_reads_otherwise_is_refused(tmp_path, corrupt):
     assert differs  # trimesh's own reading of the altered file
     check = check_surface_file(path, mesh, obj)
     assert check["agree"] is False and check["problem"].startswith(f"{path}: trimesh"), check
+
+
+@pytest.mark.parametrize("suffix", [".ply", ".obj"])
+def test_a_header_names_only_the_columns_its_file_holds(tmp_path, capsys, suffix):
+    # the OBJ's comments named the PLY's per-vertex columns, which it does not hold
+    isoflow.write_volume(object_with_contacts(), tmp_path / "in.npz")
+    out = tmp_path / f"s{suffix}"
+    assert main(["surface", str(tmp_path / "in.npz"), "-o", str(out), "-q"]) == 0
+    comments = [line for line in out.read_text(errors="replace").splitlines() if line.startswith(("#", "comment"))]
+    named = any("gamma" in line for line in comments)
+    raw = trimesh.load(out, process=False).metadata.get("_ply_raw")  # an OBJ has no columns beside x y z
+    held = raw is not None and "gamma" in raw["vertex"]["data"].dtype.names
+    assert named == held == (suffix == ".ply"), comments
+
+
+def test_an_obj_of_an_input_named_with_a_line_break_is_lines_of_obj_keywords(tmp_path, capsys):
+    # the name's line break ended the comment: its rest was a line of no OBJ keyword
+    isoflow.write_volume(object_with_contacts(), tmp_path / "in\nput.npz")
+    out = tmp_path / "s.obj"
+    assert main(["surface", str(tmp_path / "in\nput.npz"), "-o", str(out), "-q"]) == 0
+    lines = out.read_text().splitlines()
+    assert all(line.split()[0] in ("#", "v", "f") for line in lines), [x for x in lines if x[:1] not in "#vf"]
+    assert any(line.startswith("# isoflow surface of in put.npz, 6-connectivity") for line in lines)

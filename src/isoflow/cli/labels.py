@@ -1184,7 +1184,7 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
         faces = f"{triangles} faces (triangles)"
         rows = np.concatenate([r for _, r in glb_parts]) if glb_parts else np.zeros(0, np.int64)
         export.write_glb_sets(target[1], [parts for parts, _ in glb_parts], np.argsort(rows), force=args.force,
-                              comment=f"isoflow surface --labels of {args.input}, "
+                              comment=f"isoflow surface --labels of {Path(args.input).name}, "
                                       f"{args.connectivity or 6}-connectivity")
         framed = sum(len(parts.matrices) for parts, _ in glb_parts)
         if framed and not args.quiet:  # MeshLab reads those nodes in voxel units
@@ -1223,8 +1223,11 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
     with output_set(f"{target[1]}/", retire=retire):
         for done, (name, mesh, obj, comps) in enumerate(meshes, 1):
             path = target[1] / f"{name}{target[2]}"
+            # the connectivity as surface records it: genus reads the file at it
+            comments = (f"isoflow surface --labels of {Path(args.input).name}, {mesh.connectivity}-connectivity: "
+                        f"{name}", export.VERTEX_COMMENT)
             written = export.write_mesh_file(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
-                                           force=args.force, comments=(f"isoflow surface --labels: {name}",))
+                                           force=args.force, comments=comments)
             count += written["face_count"]
             framed += bool(written.get("framed"))
             kinds[written["faces"]] = None

@@ -129,7 +129,7 @@ def report_written(args: argparse.Namespace, out: Path, mesh, obj, written: dict
     print(
         terminal_text(f"{out}: {len(mesh.vertices)} vertices, {written['face_count']} faces ({written['faces']}), "
                       f"{counted(len(comps), 'closed surface')}, V-E+F = {mesh.euler_characteristic}"
-                      + (f", {counted(mesh.pinched, 'pinched vertex', 'pinched vertices')}" if mesh.pinched else ""))
+                      + (f", {pinched_words(mesh.pinched)})" if mesh.pinched else ""))
     )
     if written.get("moved_voxels", 0) > export.STL_NOTE_VOXELS:  # the file's surface is not the one asked for
         print(terminal_text(f"isoflow surface: warning: {export.stl_move_note(out, written)}"), file=sys.stderr)
@@ -281,8 +281,8 @@ def report_store_written(args: argparse.Namespace, array, frame, written: dict, 
     never_written(str(args.input), unwritten_fill(open_store(args.input).array, args.label), args.label)
     print(terminal_text(f"{out}: {written['vertices']} vertices, {written['faces']} faces ({written['kind']}), "
                         f"V-E+F = {written['euler_characteristic']}"
-                        + (f", {counted(written['pinched'], 'pinched vertex', 'pinched vertices')}" if written["pinched"] else "")
-                        + " (written block by block; isoflow info counts its closed surfaces)"))
+                        + (f", {pinched_words(written['pinched'])}; " if written["pinched"] else " (")
+                        + "written block by block; isoflow info counts its closed surfaces)"))
     moved = float64_move_note(out, corners)
     if moved:  # the corners moved by float64 itself
         print(terminal_text(f"isoflow surface: warning: {moved}"), file=sys.stderr)
@@ -323,6 +323,20 @@ def refuse_store_beyond_memory(args: argparse.Namespace) -> None:
         raise IsoflowError(f"{args.input}: {asked} needs the whole surface in memory (more than {sized(default_budget())} "
                            f"here); a store's surface is written block by block as binary PLY or STL "
                            f"({', '.join(STREAM_SUFFIXES)})")
+
+
+def pinched_words(pinched: int) -> str:
+    """The pinched vertices of a surface line, up to its closing
+    parenthesis: what the mesh did there, as ``isoflow info`` says it (a
+    user who asked for 26-connectivity sees two shells in MeshLab where
+    two voxels meet at a corner, and "pinched" alone did not say why).
+
+    Examples
+    --------
+    >>> pinched_words(1) + ")"
+    '1 pinched vertex (split in the mesh, joined by the connectivity)'
+    """
+    return f"{counted(pinched, 'pinched vertex', 'pinched vertices')} (split in the mesh, joined by the connectivity"
 
 
 def surface_comments(name: str, conn: int) -> tuple[str, ...]:

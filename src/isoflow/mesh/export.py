@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -395,7 +396,8 @@ def write_obj(
     d = _digits(vertices, step)
     with atomic_write(path, "w", sync=sync) as fh:
         for c in comments:
-            fh.write(f"# {c}\n")
+            # a comment is one line: an input named with a line break left its rest a line of no OBJ keyword
+            fh.write(f"# {' '.join(c.split())}\n")
         write_rows(fh, np.asarray(vertices, np.float64).reshape(-1, 3), f"v %.{d}g %.{d}g %.{d}g\n")
         for size, rows in _size_groups(faces):
             write_rows(fh, rows + 1, "f" + " %d" * size + "\n")
@@ -753,8 +755,9 @@ def write_mesh_file(
     if suffix == ".ply":
         write_ply(path, mesh_vertex_table(mesh, obj), faces, ascii=ascii, force=force, comments=tagged, sync=sync)
     elif suffix == ".obj":
-        write_obj(path, obj.world(mesh.vertices), faces, force=force, comments=tagged, sync=sync,
-                  spacing=obj.spacing)
+        # an OBJ holds positions alone: no comment names the PLY's columns in it
+        write_obj(path, obj.world(mesh.vertices), faces, force=force, sync=sync, spacing=obj.spacing,
+                  comments=tuple(c for c in tagged if c != VERTEX_COMMENT))
     elif suffix == ".stl":
         xyz = obj.world(mesh.vertices)
         effect = float32_effect(xyz, obj.spacing)
@@ -807,7 +810,9 @@ def stl_header(text: str, space: str | None = None) -> str:
     """A binary STL's 80-byte header text: ``text`` with the frame's
     :func:`space_tag` after it, ``text`` cut short where both do not fit
     (the tag is what a reader acts on; no reader makes anything else of
-    the header).
+    the header). Where ``text`` records a connectivity (``..., 26-connectivity``),
+    the cut is made before it, in the name, marked ``...``: ``isoflow genus``
+    reads the file at the connectivity the header records.
 
     Parameters
     ----------
@@ -829,12 +834,24 @@ def stl_header(text: str, space: str | None = None) -> str:
     (80, ' SPACE=LPS')
     >>> stl_header("a triangle", "LAS")
     'a triangle'
+    >>> stl_header(f"isoflow surface of {'n' * 80}.npy, 26-connectivity", "RAS")[-38:]
+    'nnnnnnnn..., 26-connectivity SPACE=RAS'
     """
     text = text.encode("ascii", "replace").decode("ascii")
     tag = space_tag(space)
+    room = 80 if tag is None else 80 - len(tag) - 1
+    if len(text) > room:
+        kept = CONNECTIVITY_RECORD.search(text)
+        head = room - 3 - (len(text) - kept.start()) if kept else 0
+        text = f"{text[:head]}...{text[kept.start():]}" if head > 0 else text[:room]
     if tag is None:
-        return text[:80]
-    return f"{text[:80 - len(tag) - 1]} {tag}" if text else tag
+        return text
+    return f"{text} {tag}" if text else tag
+
+
+#: where a header records the connectivity the mesh was made at (what the
+#: name before it may be cut to keep, :func:`stl_header`)
+CONNECTIVITY_RECORD = re.compile(r", (?:6|26)-connectivity\b")
 
 
 #: an STL's float32 positions are said to move the surface when they move a

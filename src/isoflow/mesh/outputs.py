@@ -55,10 +55,17 @@ def check_output_path(
     refuse_directory_spelling(path, what)  # before Path(), which drops the slash
     path = Path(path)
     refuse_unusable_output(path)
-    if suffixes and path.suffix.lower() not in suffixes:
-        raise IsoflowError(f"{path}: {what} must end in {' or '.join(suffixes)}{near_suffix_hint(path, suffixes)}")
+    # a directory before its suffix: "out: surface must end in .ply or ..." named no directory
     if path.is_dir():  # --force must not mean "replace a directory"
         raise IsoflowError(f"{path}: is a directory; give a file name for the {what}")
+    if suffixes and path.suffix.lower() not in suffixes:
+        if str(path) == "-":  # the shell's convention for stdout, which no file is streamed to
+            raise IsoflowError(f"-: a {what} is written to a file, not to stdout; give its name, e.g. "
+                               f"{what.split()[-1]}{suffixes[0]}")
+        if path.name.lower() in suffixes:  # ".ply" (an empty $name in "$name.ply"): a hidden name of no suffix
+            raise IsoflowError(f"{path}: is a suffix alone, with no name before it; give the file's name, e.g. "
+                               f"{path.with_name(what.split()[-1] + path.name)}")
+        raise IsoflowError(f"{path}: {what} must end in {' or '.join(suffixes)}{near_suffix_hint(path, suffixes)}")
     if (path.exists() or path.is_symlink()) and not force:  # a dangling link is there too
         raise IsoflowError.worded(f"{path}: exists; pass force=True to overwrite",
                                       f"{path}: exists; pass --force to overwrite")

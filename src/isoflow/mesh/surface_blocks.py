@@ -47,7 +47,7 @@ import numpy as np
 from ..digital.lattice import DigitalObject
 from ..digital.surface import QuadMesh, row_tables, triangle_rows
 from ..errors import IsoflowError
-from ..scale.arrays import NotBinary, binary, fill_value_named, index_dtype
+from ..scale.arrays import NotBinary, as_array, binary, fill_value_named, index_dtype, refuse_object
 from ..scale.chunkcache import ChunkReader
 from ..scale.chunks import BlockTicks, decoded_chunk_voxels, is_zarr_array, smaller_blocks_help
 from ..scale.compiled import using
@@ -684,6 +684,13 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
 
     where = where or str(getattr(array, "store_path", None) or "volume")
     out = _checked_output(path, force)
+    # a path (the store's, as the command takes it), an object or a mesh: AttributeError 'str' object has no
+    # attribute 'shape'
+    refuse_object(array, where, then="and frame=obj for its placement",
+                  reader='zarr.open_array(path, mode="r"), or an OME-Zarr image\'s level: zarr.open_group(path, '
+                         'mode="r")["0"]')
+    if not hasattr(array, "shape"):  # nested lists: array-like
+        array = as_array(array, where)
     if len(array.shape) != 3:
         raise IsoflowError(f"{where}: surface needs a 3D volume, this one has shape {tuple(array.shape)}")
     conn = resolve_connectivity(3, connectivity)

@@ -114,6 +114,10 @@ def image_volume(img, where: str) -> RawVolume:
         affine, space = method_1_affine(steps), None
         mirrored = [f"pixdim[{i}] {steps[i - 1]:g}" for i in range(1, len(steps) + 1) if steps[i - 1] < 0]
         said = f"; {', '.join(mirrored)} negative: that axis runs mirrored (nibabel takes its magnitude)" if mirrored else ""
+        # a size of 0 is no size: read as 1 (nibabel, nifti1_io), which the user must hear of, not find in the mesh
+        stored = file_pixdim(img)
+        zero = [f"pixdim[{i}]" for i in range(1, len(steps) + 1) if stored[i - 1] == 0]
+        said += f"; {', '.join(zero)} 0, no voxel size: read as 1, as nibabel and nifti1_io do" if zero else ""
         note(f"{where}: no qform or sform (both codes 0): placed by the NIfTI standard's method 1, voxel (i, j, k) "
              f"at (i dx, j dy, k dz), not by nibabel's fallback affine (x mirrored, centred on 0){said}")
     unit = length_unit(img.header.get_xyzt_units()[0])  # 'mm', 'micron', 'meter' or 'unknown' (none)
@@ -236,9 +240,36 @@ def stored_pixdim(img) -> np.ndarray:
     >>> stored_pixdim(img).tolist()
     [-2.0, 1.5, 1.0]
     """
-    header = img.header
-    steps = np.asarray(header.get_zooms(), np.float64)[:3]
-    raw = header
+    steps = np.asarray(img.header.get_zooms(), np.float64)[:3]
+    stored = file_pixdim(img)[:len(steps)]
+    return np.where((stored < 0) & (steps > 0), -steps, steps)
+
+
+def file_pixdim(img) -> np.ndarray:
+    """``pixdim[1]``, ``pixdim[2]``, ``pixdim[3]`` as the file's header
+    bytes hold them, unchecked: nibabel's header check has made a negative
+    one its magnitude and a 0 one 1 (:func:`stored_pixdim`). An image held
+    in memory, or a file unreadable now, gives its header as set.
+
+    Parameters
+    ----------
+    img : nibabel.Nifti1Pair or nibabel.Nifti2Pair
+        The image.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, the three sizes.
+
+    Examples
+    --------
+    >>> import nibabel
+    >>> img = nibabel.Nifti1Image(np.ones((2, 2, 2), np.uint8), np.diag([2.0, 1.5, 1, 1]))
+    >>> img.header["pixdim"][2] = 0.0
+    >>> file_pixdim(img).tolist()
+    [2.0, 0.0, 1.0]
+    """
+    header = raw = img.header
     holder = img.file_map.get("header", img.file_map.get("image"))  # a .nii holds its header in "image"
     if holder is not None and (holder.filename is not None or holder.fileobj is not None):
         try:
@@ -246,8 +277,7 @@ def stored_pixdim(img) -> np.ndarray:
                 raw = type(header).from_fileobj(fh, check=False)
         except (OSError, ValueError):  # the file as loaded above: unreadable now, its checked header stands
             raw = header
-    stored = np.asarray(raw["pixdim"], np.float64)[1:len(steps) + 1]
-    return np.where((stored < 0) & (steps > 0), -steps, steps)
+    return np.asarray(raw["pixdim"], np.float64)[1:4]
 
 
 def method_1_affine(zooms) -> np.ndarray:

@@ -808,8 +808,8 @@ def check_label(label, dtype, where: str) -> int | float:
         value = float(label)
     except OverflowError:  # an int beyond every float
         value = np.inf if label > 0 else -np.inf
-    if not np.isfinite(value) and not isinstance(label, (int, np.integer)):
-        raise IsoflowError(f"{where}: label must be a number, got {given_text(label)}")
+    if not np.isfinite(value) and not isinstance(label, (int, np.integer)):  # "--label 1e400" is inf: a number
+        raise IsoflowError(f"{where}: label must be a finite number, got {given_text(label)}")
     whole = not np.isfinite(value) or value.is_integer()  # (an int beyond every float is whole)
     if dtype.kind in "iu" and whole:
         info = np.iinfo(dtype)
