@@ -780,7 +780,7 @@ def analyze_chunked(
     import_dask(array=False)
     shape, where = _checked(array, where)
     conn = resolve_connectivity(len(shape), connectivity)
-    place = placed(None, len(shape), Place(pitch, origin, unit))
+    place = placed(None, len(shape), Place(pitch, origin, unit), "analyze_chunked")
     if 0 in shape:  # no block to read: the report of the empty array, as analyze gives it
         from .analysis import analyze
 
