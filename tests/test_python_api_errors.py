@@ -1947,6 +1947,8 @@ REFUSALS = [
     ("analyze", lambda tmp: isoflow.analyze(CUBE, pitch=-1), ": 'pitch' must be positive"),
     ("analyze", lambda tmp: isoflow.analyze(CUBE, origin=(1, 2)), ": 'origin' must be 3 numbers"),
     ("label_table", lambda tmp: isoflow.label_table(LABELS, pitch=-1), ": 'pitch' must be positive"),
+    ("analyze_zarr", lambda tmp: isoflow.analyze_zarr(_zarr_cube(tmp) and tmp / "cube.zarr", pitch=-1),
+     ": 'pitch' must be positive"),
     ("write_labels", lambda tmp: isoflow.write_labels(LABELS, tmp / "l.npz", pitch=-1), ": 'pitch' must be positive"),
     ("from_manifold", lambda tmp: isoflow.from_manifold(_cube_manifold(), pitch=-1), ": 'pitch' must be positive"),
     ("from_manifold", lambda tmp: isoflow.from_manifold(_cube_manifold(), pitch=(1, 2)), ": 'pitch' must be one number"),
@@ -2003,7 +2005,7 @@ def _saved(folder: Path, mesh=None) -> Path:
 @pytest.mark.parametrize(("name", "call", "words"), REFUSALS, ids=[f"{n}-{w.strip(': ')[:24]}" for n, _, w in REFUSALS])
 def test_a_refusal_begins_with_the_function_called(name, call, words, tmp_path):
     pytest.importorskip("trimesh")
-    if name == "voxelize_to_zarr":
+    if name in ("voxelize_to_zarr", "analyze_zarr"):
         pytest.importorskip("zarr")
     assert name in isoflow.__all__
     with warnings.catch_warnings():
