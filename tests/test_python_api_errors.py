@@ -88,9 +88,9 @@ def test_a_mapping_given_for_an_array_is_named_with_its_article():
 @pytest.mark.parametrize("call,where", [
     (lambda image, p: isoflow.analyze(image), "volume"),
     (lambda image, p: isoflow.boundary_mesh(image), "boundary_mesh"),
-    (lambda image, p: isoflow.run_flow(image), "DigitalObject volume"),
+    (lambda image, p: isoflow.run_flow(image), "run_flow: obj"),
     (lambda image, p: isoflow.DigitalObject(image), "DigitalObject volume"),
-    (lambda image, p: isoflow.write_surface(image, p / "s.ply"), "DigitalObject volume"),
+    (lambda image, p: isoflow.write_surface(image, p / "s.ply"), "write_surface: obj"),
 ])
 def test_a_label_image_where_a_binary_volume_is_taken_is_named(tmp_path, call, where):
     # NumPy made the LabelImage a 0D object array: refused as "array of type object"
@@ -147,14 +147,14 @@ RAGGED = [[[1, 0], [1]], [[1, 1], [0, 1]]]  # a 2x2x2 volume with one voxel left
     (lambda: isoflow.closed_surfaces(RAGGED), "volume"),
     (lambda: isoflow.boundary_mesh(RAGGED), "volume"),
     (lambda: isoflow.configuration_histogram(RAGGED), "volume"),
-    (lambda: isoflow.flow_step(RAGGED), "DigitalObject volume"),
-    (lambda: isoflow.run_flow(RAGGED), "DigitalObject volume"),
-    (lambda: isoflow.to_manifold(RAGGED), "DigitalObject volume"),
+    (lambda: isoflow.flow_step(RAGGED), "flow_step: obj"),
+    (lambda: isoflow.run_flow(RAGGED), "run_flow: obj"),
+    (lambda: isoflow.to_manifold(RAGGED), "to_manifold: obj"),
     (lambda: isoflow.label_table(RAGGED), "label_table image"),
     (lambda: isoflow.class_histogram([list(range(255)), [1]]), "config_hist"),
     (lambda: isoflow.planar_index([[1, 0], [1]]), "points"),
     (lambda: isoflow.DigitalObject.from_points([[0, 0, 0], [1, 0]]), "lattice point coordinates"),
-    (lambda: isoflow.voxelize_mesh(np.eye(3), [[0, 1, 2], [0, 1]], resolution=4), "voxelize: faces"),
+    (lambda: isoflow.voxelize_mesh(np.eye(3), [[0, 1, 2], [0, 1]], resolution=4), "voxelize_mesh: faces"),
 ])
 def test_nested_lists_of_uneven_lengths_are_refused_naming_the_argument(call, where):
     # NumPy's own ValueError ("setting an array element with a sequence") came through, naming neither
@@ -212,7 +212,8 @@ def _refused_as_masked(call, where, count):
 @pytest.mark.parametrize(("function", "where"), [
     *[(f, "volume") for f in (isoflow.analyze, isoflow.euler_characteristic, isoflow.betti_numbers, isoflow.configurations,
                               isoflow.configuration_histogram, isoflow.closed_surfaces, isoflow.boundary_mesh)],
-    *[(f, "DigitalObject volume") for f in (isoflow.DigitalObject, isoflow.flow_step, isoflow.run_flow, isoflow.to_manifold)],
+    (isoflow.DigitalObject, "DigitalObject volume"),
+    *[(f, f"{f.__name__}: obj") for f in (isoflow.flow_step, isoflow.run_flow, isoflow.to_manifold)],
 ])
 def test_a_masked_volume_with_masked_voxels_is_refused_naming_the_count(function, where):
     _refused_as_masked(lambda: function(MASKED), where, 2)
@@ -223,8 +224,8 @@ def test_a_masked_volume_with_masked_voxels_is_refused_naming_the_count(function
     (lambda: isoflow.label_table(isoflow.LabelImage(MASKED_LABELS, np.ones(3), np.zeros(3))), "label_table image", 25),
     (lambda: isoflow.planar_index(MASKED[:, :, 2]), "points", 2),
     (lambda: isoflow.class_histogram(_masked(np.ones(256, np.int64), 3)), "config_hist", 1),
-    (lambda: isoflow.voxelize_mesh(*_masked_mesh("vertices"), resolution=4), "voxelize: vertices", 1),
-    (lambda: isoflow.voxelize_mesh(*_masked_mesh("faces"), resolution=4), "voxelize: faces", 3),
+    (lambda: isoflow.voxelize_mesh(*_masked_mesh("vertices"), resolution=4), "voxelize_mesh: vertices", 1),
+    (lambda: isoflow.voxelize_mesh(*_masked_mesh("faces"), resolution=4), "voxelize_mesh: faces", 3),
     (lambda: isoflow.voxelize_meshes([_masked_mesh("vertices")], resolution=4), "mesh 1: vertices", 1),
 ])
 def test_a_masked_array_with_masked_elements_is_refused_naming_the_count(call, where, count):
@@ -322,11 +323,11 @@ def test_betti_numbers_refuses_a_chi_that_is_no_integer(chi):
 
 
 @pytest.mark.parametrize(("args", "kwargs", "words"), [
-    ((16,), {}, "resolutions must be a sequence of integers, got 16; one resolution is [16]"),
-    (([16],), {"time_limit": -1}, "time_limit must be a positive number of seconds, got -1"),
-    (([16],), {"time_limit": float("nan")}, "time_limit must be a positive number of seconds, got nan"),
-    (([16],), {"max_resolution": 0}, "max_resolution must be an integer >= 1, got 0"),
-    (([16],), {"max_resolution": 2.5}, "max_resolution must be an integer >= 1, got 2.5"),
+    ((16,), {}, "verify_genus: resolutions must be a sequence of integers, got 16; one resolution is [16]"),
+    (([16],), {"time_limit": -1}, "verify_genus: time_limit must be a positive number of seconds, got -1"),
+    (([16],), {"time_limit": float("nan")}, "verify_genus: time_limit must be a positive number of seconds, got nan"),
+    (([16],), {"max_resolution": 0}, "verify_genus: max_resolution must be an integer >= 1, got 0"),
+    (([16],), {"max_resolution": 2.5}, "verify_genus: max_resolution must be an integer >= 1, got 2.5"),
 ])
 def test_verify_genus_checks_its_arguments_as_the_command_line_does(args, kwargs, words):
     # a lone int was list()'s TypeError; the others ran and stopped at once
@@ -588,7 +589,7 @@ def test_digital_object_refuses_a_bool_pitch(pitch, shown):
     # positive"); in a tuple of floats asarray made True 1.0 before any check
     with pytest.raises(IsoflowError) as info:
         isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=pitch)
-    assert str(info.value) == f"'pitch' must be a number (one, or one per axis), not True or False, got {shown}"
+    assert str(info.value) == f"DigitalObject: 'pitch' must be a number (one, or one per axis), not True or False, got {shown}"
     assert isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=(1, 2.0, 1)).pitch.tolist() == [1.0, 2.0, 1.0]
 
 
@@ -597,7 +598,7 @@ def test_a_parity_other_than_0_or_1_is_named_as_given(parity, shown):
     # parity=2 was refused as "got 2.0": the number after its float check, not the one written
     with pytest.raises(IsoflowError) as info:
         isoflow.DigitalObject(np.ones((2, 2, 2), bool), parity=parity)
-    assert str(info.value) == f"'parity' must be 0 (lattice) or 1 (dual lattice), got {shown}"
+    assert str(info.value) == f"DigitalObject: 'parity' must be 0 (lattice) or 1 (dual lattice), got {shown}"
 
 
 def test_numbers_held_as_objects_place_an_object_as_the_same_numbers_do():
@@ -614,7 +615,7 @@ def test_numbers_held_as_objects_place_an_object_as_the_same_numbers_do():
                        (np.array([1, None, 1], dtype=object), "[1, None, 1]")):
         with pytest.raises(IsoflowError) as info:
             isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=bad)
-        assert str(info.value) == f"'pitch' must be 3 numbers, one per axis, got {shown}"
+        assert str(info.value) == f"DigitalObject: 'pitch' must be 3 numbers, one per axis, got {shown}"
 
 
 @pytest.mark.parametrize("one", [Fraction(1, 2), np.array(0.5, dtype=object), np.array([Fraction(1, 2)], dtype=object)],
@@ -637,7 +638,7 @@ def test_one_pitch_that_is_no_number_is_refused_as_no_number(pitch, shown):
     which reads as if one number were not taken."""
     with pytest.raises(IsoflowError) as info:
         isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=pitch)
-    assert str(info.value) == f"'pitch' must be a number (one, or one per axis), got {shown}"
+    assert str(info.value) == f"DigitalObject: 'pitch' must be a number (one, or one per axis), got {shown}"
 
 
 @pytest.mark.parametrize(("kwargs", "words"), [
@@ -1464,7 +1465,7 @@ def test_digital_object_refuses_a_bool_parity(parity):
     assert isoflow.DigitalObject(volume, parity=1).parity == 1
     with pytest.raises(IsoflowError) as info:
         isoflow.DigitalObject(volume, parity=parity)
-    assert str(info.value) == f"'parity' must be 0 (lattice) or 1 (dual lattice), got {bool(parity)}"
+    assert str(info.value) == f"DigitalObject: 'parity' must be 0 (lattice) or 1 (dual lattice), got {bool(parity)}"
 
 
 @pytest.mark.parametrize("shape", [(2, 3, 4), (3, 4, 4), (3, 4), (4, 5, 6)])
@@ -1487,7 +1488,7 @@ def test_on_dual_lattice_refuses_a_vertex_volume_of_another_shape(shape):
 def test_digital_object_refuses_a_bool_origin_or_offset(field, value, kind):
     # True equals 1: origin=(True, 0, 0) placed the object at x = 1, as pitch=True and parity=True are not taken
     volume = np.ones((2, 2, 2), bool)
-    with pytest.raises(IsoflowError, match=rf"^'{field}' must be {kind}, not True or False, got \["):
+    with pytest.raises(IsoflowError, match=rf"^DigitalObject: '{field}' must be {kind}, not True or False, got \["):
         isoflow.DigitalObject(volume, **{field: value})
     if field == "origin":  # the functions that take a place check it as the object does
         for call in (lambda: isoflow.label_table(volume.astype(np.uint8), origin=value),
@@ -1504,10 +1505,10 @@ def test_digital_object_refuses_a_bool_origin_or_offset(field, value, kind):
 def test_a_ragged_or_masked_place_is_refused_naming_the_field(field, given, words):
     # a ragged list raised NumPy's ValueError; a masked element was read as the number stored under the mask
     volume = np.ones((2, 2, 2), bool)
-    for call in (lambda: isoflow.DigitalObject(volume, **{field: given}),
-                 lambda: isoflow.analyze(volume, **{field: given}),
-                 lambda: isoflow.label_table(volume.astype(np.uint8), **{field: given})):
-        with pytest.raises(IsoflowError, match=f"^'{field}': {words}"):
+    for name, call in (("DigitalObject", lambda: isoflow.DigitalObject(volume, **{field: given})),
+                       ("analyze", lambda: isoflow.analyze(volume, **{field: given})),
+                       ("label_table", lambda: isoflow.label_table(volume.astype(np.uint8), **{field: given}))):
+        with pytest.raises(IsoflowError, match=f"^{name}: '{field}': {words}"):
             call()
 
 
@@ -1917,3 +1918,134 @@ def test_a_number_given_as_a_numpy_string_is_refused_as_text(call, words):
     with pytest.raises(IsoflowError) as info:
         call(np.str_("6"))
     assert str(info.value) == words
+
+
+def _open_box():
+    box = _box()
+    box.faces = box.faces[:-1]  # one triangle gone: 3 boundary edges, as trimesh counts them
+    return box
+
+
+def _coincident():
+    import trimesh
+
+    return trimesh.Trimesh(np.zeros((3, 3)), [[0, 1, 2]], process=False)
+
+
+CUBE = np.pad(np.ones((2, 2, 2), bool), 1)
+LABELS = CUBE.astype(np.uint8) * 2  # a label image where a mask is taken: values 0 and 2
+LABELS_2D = np.array([[0, 1], [2, 2]], np.uint8)
+
+# (function, call, the words that follow its name): each refusal of the
+# Python API begins with the function called (after the file or mesh it is
+# about, where one is named), never with the command's name "voxelize", a
+# class not called ("DigitalObject volume") or no name at all
+REFUSALS = [
+    # a bad pitch or origin
+    ("DigitalObject", lambda tmp: isoflow.DigitalObject(CUBE, pitch=-1), ": 'pitch' must be positive"),
+    ("DigitalObject", lambda tmp: isoflow.DigitalObject(CUBE, origin="abc"), ": 'origin' must be 3 numbers"),
+    ("analyze", lambda tmp: isoflow.analyze(CUBE, pitch=-1), ": 'pitch' must be positive"),
+    ("analyze", lambda tmp: isoflow.analyze(CUBE, origin=(1, 2)), ": 'origin' must be 3 numbers"),
+    ("label_table", lambda tmp: isoflow.label_table(LABELS, pitch=-1), ": 'pitch' must be positive"),
+    ("analyze_zarr", lambda tmp: isoflow.analyze_zarr(_zarr_cube(tmp) and tmp / "cube.zarr", pitch=-1),
+     ": 'pitch' must be positive"),
+    ("write_labels", lambda tmp: isoflow.write_labels(LABELS, tmp / "l.npz", pitch=-1), ": 'pitch' must be positive"),
+    ("from_manifold", lambda tmp: isoflow.from_manifold(_cube_manifold(), pitch=-1), ": 'pitch' must be positive"),
+    ("from_manifold", lambda tmp: isoflow.from_manifold(_cube_manifold(), pitch=(1, 2)), ": 'pitch' must be one number"),
+    ("voxelize_mesh", lambda tmp: isoflow.voxelize_mesh(_box(), pitch=1e-300), ": pitch=1e-300 needs a "),
+    ("voxelize_meshes", lambda tmp: isoflow.voxelize_meshes([_box()], pitch=1e-300), ": pitch=1e-300 needs a "),
+    ("voxelize_file", lambda tmp: isoflow.voxelize_file(_saved(tmp), pitch=1e-300), ": pitch=1e-300 needs a "),
+    ("voxelize_to_zarr", lambda tmp: isoflow.voxelize_to_zarr(_box(), tmp / "v.zarr", pitch=1e-300),
+     ": pitch=1e-300 needs a "),
+    # a bad mesh, or none
+    ("voxelize_mesh", lambda tmp: isoflow.voxelize_mesh(_open_box(), pitch=0.5, strict=True), ": mesh is not watertight"),
+    ("voxelize_meshes", lambda tmp: isoflow.voxelize_meshes([_open_box()], pitch=0.5, strict=True),
+     ": mesh is not watertight"),
+    ("voxelize_file", lambda tmp: isoflow.voxelize_file(_saved(tmp, _open_box()), pitch=0.5, strict=True),
+     ": mesh is not watertight"),
+    ("voxelize_to_zarr", lambda tmp: isoflow.voxelize_to_zarr(_open_box(), tmp / "v.zarr", pitch=0.5, strict=True),
+     ": mesh is not watertight"),
+    ("voxelize_mesh", lambda tmp: isoflow.voxelize_mesh(np.eye(3), pitch=0.5), ": faces are missing"),
+    ("voxelize_mesh", lambda tmp: isoflow.voxelize_mesh(_coincident(), pitch=0.5), ": mesh bounding box has zero size"),
+    ("voxelize_to_zarr", lambda tmp: isoflow.voxelize_to_zarr(_coincident(), tmp / "v.zarr", pitch=0.5),
+     ": mesh bounding box has zero size"),
+    ("voxelize_meshes", lambda tmp: isoflow.voxelize_meshes([], pitch=0.5), ": no meshes given"),
+    ("verify_genus", lambda tmp: isoflow.verify_genus(_box(), [16], max_resolution=0), ": max_resolution must be"),
+    ("verify_genus", lambda tmp: isoflow.verify_genus(_box(), 16), ": resolutions must be a sequence"),
+    # a label image where a mask is taken, named as the argument given
+    ("DigitalObject", lambda tmp: isoflow.DigitalObject(LABELS), " volume: not a binary volume"),
+    ("run_flow", lambda tmp: isoflow.run_flow(LABELS), ": obj: not a binary volume"),
+    ("flow_step", lambda tmp: isoflow.flow_step(LABELS), ": obj: not a binary volume"),
+    ("write_surface", lambda tmp: isoflow.write_surface(LABELS, tmp / "s.ply"), ": obj: not a binary volume"),
+    ("to_manifold", lambda tmp: isoflow.to_manifold(LABELS), ": obj: not a binary volume"),
+    # an array of a dimension the function does not take
+    ("DigitalObject", lambda tmp: isoflow.DigitalObject(np.ones(3, bool)), " volume: a digital object is 2D, 3D or 4D"),
+    ("run_flow", lambda tmp: isoflow.run_flow(np.ones(3, bool)), ": obj: a digital object is 2D, 3D or 4D"),
+    ("flow_step", lambda tmp: isoflow.flow_step(np.ones((1,) * 5, bool)), ": obj: a digital object is 2D, 3D or 4D"),
+    ("write_volume", lambda tmp: isoflow.write_volume(np.ones(3, bool), tmp / "v.npy"),
+     ": obj: a digital object is 2D, 3D or 4D"),
+    # a 2D label image refused as 2D, not first offered a threshold that leaves it 2D
+    ("to_manifold", lambda tmp: isoflow.to_manifold(LABELS_2D), " needs a 3D object, got 2D"),
+    ("boundary_mesh", lambda tmp: isoflow.boundary_mesh(LABELS_2D), " needs a 3D volume, got a 2D array"),
+    ("closed_surfaces", lambda tmp: isoflow.closed_surfaces(np.ones((2, 2), bool)), " needs a 3D volume, got a 2D array"),
+]
+
+
+def _cube_manifold():
+    m3 = pytest.importorskip("manifold3d")
+    return m3.Manifold.cube()
+
+
+def _saved(folder: Path, mesh=None) -> Path:
+    path = folder / "box.stl"
+    (mesh or _box()).export(path)
+    return path
+
+
+@pytest.mark.parametrize(("name", "call", "words"), REFUSALS, ids=[f"{n}-{w.strip(': ')[:24]}" for n, _, w in REFUSALS])
+def test_a_refusal_begins_with_the_function_called(name, call, words, tmp_path):
+    pytest.importorskip("trimesh")
+    if name in ("voxelize_to_zarr", "analyze_zarr"):
+        pytest.importorskip("zarr")
+    assert name in isoflow.__all__
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a note on the mesh read is no refusal
+        with pytest.raises(IsoflowError) as info:
+            call(tmp_path)
+    message = str(info.value)
+    # a file or a mesh the refusal is about comes first, as "box.stl: voxelize_file: ..."
+    about = {"voxelize_file": f"{tmp_path / 'box.stl'}: ", "voxelize_to_zarr": "mesh: "}.get(name, "")
+    if name == "voxelize_meshes" and "mesh is not watertight" in words:
+        about = "mesh 1: "
+    assert message.startswith(f"{about}{name}{words}") and "\n" not in message, message
+    # the refused writers wrote nothing
+    assert not any(tmp_path.glob("[lvs].*"))
+
+
+@pytest.mark.parametrize(("name", "call", "words"), [r for r in REFUSALS if r[0].startswith("voxelize")])
+def test_a_shared_refusal_keeps_the_command_lines_words(name, call, words, tmp_path):
+    # the command line prints command_line: the voxelize command's name where the function's stands in Python
+    pytest.importorskip("trimesh")
+    if name == "voxelize_to_zarr":
+        pytest.importorskip("zarr")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(IsoflowError) as info:
+            call(tmp_path)
+    command_line = info.value.command_line or str(info.value)
+    assert name not in command_line.replace("voxelize_mesh(", "")
+    assert re.search(r"(^|: )voxelize: ", command_line), command_line
+    assert "--pitch 1e-300 needs" in command_line if "pitch=" in words else f"voxelize{words}" in command_line
+
+
+def test_the_command_line_still_names_the_command(tmp_path):
+    # what a user of the shell reads is unchanged: the command and its options
+    import subprocess
+    import sys
+
+    path = _saved(tmp_path, _open_box())
+    done = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(path), "-o", str(tmp_path / "v.npy"),
+                           "--pitch", "0.5", "--strict"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2
+    assert done.stderr.startswith(f"isoflow voxelize: error: {path}: voxelize: mesh is not watertight: 3 boundary edges")
+    assert not (tmp_path / "v.npy").exists()

@@ -9,6 +9,7 @@ nobody has to read a traceback from inside numpy.
 from __future__ import annotations
 
 import contextlib
+import copy
 import math
 import os
 import re
@@ -638,6 +639,44 @@ def refuse_empty_path(value: str | os.PathLike, named: str) -> None:
         raise IsoflowError(f"{named} is '', an empty file name; give the file's name")
 
 
+def called_words(text: str, function: str, command: str | None = None) -> str:
+    """A refusal's words as the Python API's ``function`` says them: where
+    ``command`` is given, its name (at the start, or after the file or mesh
+    the words begin with) in the function's place, and words that do not
+    name it as they are; without it, the function's name before words
+    that do not begin with it.
+
+    Parameters
+    ----------
+    text : str
+        The refusal's words.
+    function : str
+        The function called.
+    command : str, optional
+        The command whose name the words may give.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> called_words("voxelize: no meshes given", "voxelize_meshes", "voxelize")
+    'voxelize_meshes: no meshes given'
+    >>> called_words("a.stl: voxelize: empty mesh", "voxelize_file", "voxelize")
+    'a.stl: voxelize_file: empty mesh'
+    >>> called_words("a.stl: no such file or directory", "voxelize_file", "voxelize")
+    'a.stl: no such file or directory'
+    >>> called_words("'pitch' must be positive, got -1", "analyze"), called_words("analyze: x", "analyze")
+    ("analyze: 'pitch' must be positive, got -1", 'analyze: x')
+    """
+    if command is None:
+        return text if text.startswith(f"{function}:") else f"{function}: {text}"
+    head = f"{command}: "
+    at = 0 if text.startswith(head) else text.find(f": {head}") + 2
+    return text if at == 1 else text[:at] + f"{function}: " + text[at + len(head):]
+
+
 class IsoflowError(ValueError):
     """Bad input: a missing or unreadable file, an empty or open mesh, ...
 
@@ -672,6 +711,41 @@ class IsoflowError(ValueError):
         """
         out = cls(python)
         out.command_line = command_line
+        return out
+
+    def called(self, function: str, command: str | None = None) -> IsoflowError:
+        """This error as the Python API's ``function`` raises it, its
+        message in :func:`called_words`, its :attr:`command_line` words as
+        they were: a refusal a function shares with the command line, or
+        with another function, named the command or nothing where the
+        caller called the function.
+
+        Parameters
+        ----------
+        function : str
+            The function called.
+        command : str, optional
+            The command's name, as the shared refusal begins with it.
+
+        Returns
+        -------
+        IsoflowError
+            Of this error's kind (a copy); this error itself where its
+            message is left as it is.
+
+        Examples
+        --------
+        >>> e = IsoflowError("mesh 1: voxelize: no faces").called("voxelize_meshes", "voxelize")
+        >>> str(e), e.command_line
+        ('mesh 1: voxelize_meshes: no faces', 'mesh 1: voxelize: no faces')
+        """
+        text = str(self)
+        python = called_words(text, function, command)
+        if python == text:
+            return self
+        out = copy.copy(self)  # of its kind, with its attributes (a NotBinary's remedy, a NoSuchFile's errno)
+        out.args = (python,)
+        out.command_line = text if self.command_line is None else self.command_line
         return out
 
     def at(self, where: object) -> IsoflowError:

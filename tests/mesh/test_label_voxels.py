@@ -346,7 +346,7 @@ def test_a_pitch_whose_grid_is_past_float64_is_refused_as_for_one_mesh(split):
         voxelize(trimesh.util.concatenate([a, b]).vertices, trimesh.util.concatenate([a, b]).faces, pitch=1e-300,
                  max_bytes=budget)
     meshes = [trimesh.util.concatenate([a, b])] if split else [a, b]
-    with pytest.raises(IsoflowError, match=r"^voxelize: pitch=1e-300 needs a .*grid") as several:
+    with pytest.raises(IsoflowError, match=r"^voxelize_meshes: pitch=1e-300 needs a .*grid") as several:
         voxelize_meshes(meshes, pitch=1e-300, split=split, max_bytes=budget)
     assert "\n" not in str(several.value)
     assert several.value.fit > 0 and one.value.fit > 0

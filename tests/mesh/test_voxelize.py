@@ -1040,7 +1040,7 @@ def test_voxelize_mesh_takes_a_mesh_alone_as_every_voxeliser_does():
     # the solid's volume, as trimesh measures the mesh (2 pi^2 R r^2)
     assert ref.voxels * ref.pitch**3 == pytest.approx(mesh.volume, rel=0.03)
     for bad in (mesh.vertices, "torus.stl"):
-        with pytest.raises(IsoflowError, match="^voxelize: faces are missing"):
+        with pytest.raises(IsoflowError, match="^voxelize_mesh: faces are missing"):
             voxelize_mesh(bad, resolution=8)
 
 

@@ -157,11 +157,12 @@ class Place(NamedTuple):
     unit: str | None = None
 
 
-def placed(obj, ndim: int, given: Place) -> tuple[np.ndarray, np.ndarray, str | None]:
+def placed(obj, ndim: int, given: Place, function: str = "analyze") -> tuple[np.ndarray, np.ndarray, str | None]:
     """``(spacing, corner, unit)`` of the report's world measures: the
     voxel size, the world position of voxel 0's lowest corner and the
     length unit, of ``obj`` (a DigitalObject) with those ``given`` in
-    place of its own, checked as an object's are.
+    place of its own, checked as an object's are, a refusal naming
+    ``function``, the function called.
 
     Examples
     --------
@@ -171,16 +172,16 @@ def placed(obj, ndim: int, given: Place) -> tuple[np.ndarray, np.ndarray, str | 
     """
     if ndim not in (2, 3, 4):
         if any(v is not None for v in given):
-            raise IsoflowError(f"analyze: pitch, origin and unit place 2D to 4D objects, got a {ndim}D array")
+            raise IsoflowError(f"{function}: pitch, origin and unit place 2D to 4D objects, got a {ndim}D array")
         return np.ones(ndim), np.zeros(ndim), None
     own = obj if isinstance(obj, DigitalObject) else DigitalObject.placement(ndim)
     pitch = own.pitch if given.pitch is None else given.pitch
     origin = own.origin if given.origin is None else given.origin
     # as given: the object's check names a string, and a bool among numbers, which an array would make a number
     place = DigitalObject.placement(ndim, pitch=pitch, origin=origin, offset=own.offset,
-                                    parity=own.parity)
+                                    parity=own.parity, function=function)
     return place.spacing, place.world(np.zeros(ndim)), unit_given(own.unit if given.unit is None else given.unit,
-                                                                   "analyze")
+                                                                   function)
 
 
 def _analyze(obj, connectivity, surfaces: bool, method: Method, given: Place) -> dict:

@@ -384,7 +384,7 @@ def label_table(
     # the pitch and origin checked as every object's are, as given (an
     # array of them would make a string's ValueError NumPy's, and a bool
     # among numbers a number)
-    place = DigitalObject.placement(vol.ndim, pitch=pitch, origin=origin)
+    place = DigitalObject.placement(vol.ndim, pitch=pitch, origin=origin, function="label_table")
     wanted = None if labels is None else wanted_labels(labels, vol.dtype)
     if vol.ndim == 2:
         from .planar_labels import planar_table

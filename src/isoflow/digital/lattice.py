@@ -24,7 +24,9 @@ Array voxel ``v`` is the cube whose lowest corner has lattice coordinates
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import contextlib
+from collections.abc import Iterator, Sequence
+from contextvars import ContextVar
 from dataclasses import dataclass, field, replace
 from numbers import Real
 from typing import TYPE_CHECKING, Any
@@ -141,15 +143,23 @@ class DigitalObject:
                      unit: str | None = None, space: str | None = None) -> None: ...
 
     def __post_init__(self):
+        function, where = _CALLED.get()
         # a dask array is computed into memory made for this object, held
         # without the copy that memory numpy.asarray gives would need
-        anew = read_anew(self.volume, "DigitalObject volume")
+        anew = read_anew(self.volume, where)
         with one_label_at_a_time("DigitalObject({})"):
-            vol = binary(self.volume if anew is None else anew, "DigitalObject volume")
+            vol = binary(self.volume if anew is None else anew, where)
         if vol.ndim not in (2, 3, 4):
-            raise IsoflowError(f"a digital object is 2D, 3D or 4D, got a {vol.ndim}D array")
+            raise IsoflowError(f"{where}: a digital object is 2D, 3D or 4D, got a {vol.ndim}D array")
         object.__setattr__(self, "volume", read_only(vol) if anew is not None else _held(vol, self.volume))
-        n = vol.ndim
+        try:
+            self._place(vol.ndim)
+        except IsoflowError as exc:
+            raise (exc if function is None else exc.called(function)) from None
+
+    def _place(self, n: int) -> None:
+        """The fields that place the volume of ``n`` dimensions, checked
+        and held."""
         offset = (0,) * n if self.offset is None else _field(
             self.offset, "offset", n, integral=True, bound=MAX_COORDINATE)
         object.__setattr__(self, "offset", tuple(int(o) for o in offset))
@@ -178,7 +188,7 @@ class DigitalObject:
 
     # ------------------------------------------------------------ builders
     @classmethod
-    def of(cls, x: DigitalObject | ArrayLike) -> DigitalObject:
+    def of(cls, x: DigitalObject | ArrayLike, function: str | None = None, argument: str = "obj") -> DigitalObject:
         """``x`` itself if it is a DigitalObject, else the object of the
         binary array ``x`` at the origin: the API takes either.
 
@@ -186,6 +196,12 @@ class DigitalObject:
         ----------
         x : DigitalObject or array_like of bool
             An object, or a 0/1 array.
+        function : str, optional
+            The function called, which a refusal of ``x`` names with its
+            ``argument`` (``run_flow: obj``); None: as the constructor
+            names it (``DigitalObject volume``).
+        argument : str
+            The argument ``x`` was given for.
 
         Returns
         -------
@@ -202,8 +218,17 @@ class DigitalObject:
         >>> obj = DigitalObject(np.ones((2, 2), bool), pitch=0.5)
         >>> DigitalObject.of(obj) is obj, DigitalObject.of([[1, 0], [1, 1]]).voxels
         (True, 3)
+        >>> DigitalObject.of(np.ones(3, bool), "run_flow")
+        Traceback (most recent call last):
+        ...
+        isoflow.errors.IsoflowError: run_flow: obj: a digital object is 2D, 3D or 4D, got a 1D array
         """
-        return x if isinstance(x, DigitalObject) else cls(x)
+        if isinstance(x, DigitalObject):
+            return x
+        if function is None:
+            return cls(x)
+        with _called(function, f"{function}: {argument}"):
+            return cls(x)
 
     @classmethod
     def from_voxels(cls, indices: ArrayLike, **kw: Any) -> DigitalObject:
@@ -288,17 +313,24 @@ class DigitalObject:
 
     @classmethod
     def placement(cls, ndim: int | np.integer, pitch: ArrayLike | None = None, origin: ArrayLike | None = None,
-                  offset: ArrayLike | None = None, parity: int | np.integer | None = None) -> DigitalObject:
+                  offset: ArrayLike | None = None, parity: int | np.integer | None = None,
+                  function: str | None = None) -> DigitalObject:
         """An empty object of one voxel that holds a place only: ``pitch``,
         ``origin``, ``offset`` and ``parity`` (None: the defaults) checked
         as every object's are, so that a table or a file written without a
-        DigitalObject names a bad field as the object would.
+        DigitalObject names a bad field as the object would: after
+        ``function``, the function called, where it is given, else by
+        itself (a reader puts its file before it).
 
         Examples
         --------
         >>> place = DigitalObject.placement(3, pitch=(0.5, 0.5, 2.0), origin=(1, 2, 3))
         >>> place.spacing.tolist(), place.origin.tolist(), place.voxels
         ([0.5, 0.5, 2.0], [1.0, 2.0, 3.0], 0)
+        >>> DigitalObject.placement(3, pitch=-1, function="label_table")
+        Traceback (most recent call last):
+        ...
+        isoflow.errors.IsoflowError: label_table: 'pitch' must be positive (one number, or one per axis), got -1
         """
         whole = whole_given(ndim)
         if whole is None:
@@ -306,7 +338,8 @@ class DigitalObject:
             # integer than 2, 3, 4 is refused by the constructor, as the array of a file would be
             raise IsoflowError(f"placement: ndim must be 2, 3 or 4, got {given_text(ndim)}")
         given: dict[str, Any] = {"pitch": pitch, "origin": origin, "offset": offset, "parity": parity}
-        return cls(np.zeros((1,) * whole, bool), **{k: v for k, v in given.items() if v is not None})
+        with _called(function, "DigitalObject volume"):
+            return cls(np.zeros((1,) * whole, bool), **{k: v for k, v in given.items() if v is not None})
 
     # ------------------------------------------------------------ geometry
     @property
@@ -491,6 +524,23 @@ class DigitalObject:
             f"origin={self.origin.tolist()}" + ("" if self.unit is None else f", unit={self.unit!r}")
             + ("" if self.space is None else f", space={self.space!r}") + ")"
         )
+
+
+#: the function a DigitalObject made now refuses its fields as (None: no
+#: function, where a reader puts its file before them), and its volume's
+#: name: the constructor's, or the argument of the function called
+_CALLED: ContextVar[tuple[str | None, str]] = ContextVar("called", default=("DigitalObject", "DigitalObject volume"))
+
+
+@contextlib.contextmanager
+def _called(function: str | None, volume: str) -> Iterator[None]:
+    """Within it, a DigitalObject made refuses its fields naming
+    ``function`` and its volume naming ``volume``."""
+    token = _CALLED.set((function, volume))
+    try:
+        yield
+    finally:
+        _CALLED.reset(token)
 
 
 def _held(vol: np.ndarray, given: Any) -> np.ndarray:

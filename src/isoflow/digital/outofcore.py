@@ -780,7 +780,7 @@ def analyze_chunked(
     import_dask(array=False)
     shape, where = _checked(array, where)
     conn = resolve_connectivity(len(shape), connectivity)
-    place = placed(None, len(shape), Place(pitch, origin, unit))
+    place = placed(None, len(shape), Place(pitch, origin, unit), "analyze_chunked")
     if 0 in shape:  # no block to read: the report of the empty array, as analyze gives it
         from .analysis import analyze
 
@@ -819,7 +819,8 @@ def analyze_in_xyz(array: Any, order: list[int], connectivity: int | None = None
     >>> r.shape, r.bbox, r.centroid
     ([2, 3, 4], [1.0, 0.0, 6.0, 2.0, 1.0, 8.0], [1.5, 0.5, 7.0])
     """
-    spacing, corner, unit = placed(None, len(order), Place(pitch, origin, unit))
+    # (a store read by its path: the function called is analyze_zarr)
+    spacing, corner, unit = placed(None, len(order), Place(pitch, origin, unit), "analyze_zarr")
     stored = np.argsort(order)  # stored axis i is axis stored[i] of x, y, z
     # placed at 0 and moved to the corner below, in x, y, z order: the sum
     # world_measures takes (corner + spacing * index), and a far

@@ -211,7 +211,7 @@ def flow_step(obj: DigitalObject | ArrayLike, connectivity: int | np.integer | N
     True
     """
     with one_label_at_a_time("flow_step({})"):  # a label table is no flow
-        obj = DigitalObject.of(obj)
+        obj = DigitalObject.of(obj, "flow_step")
     if obj.volume.size == 0:
         # no voxel, so no vertex that stays: the empty object on the other
         # lattice, without the configurations of a volume long along its other axes

@@ -413,7 +413,7 @@ def run_flow(
     ('vanished', [27, 8, 1, 0])
     """
     with one_label_at_a_time("run_flow({})"):  # a label table is no flow
-        obj = DigitalObject.of(obj)
+        obj = DigitalObject.of(obj, "run_flow")
     conn = flow_connectivity(obj.ndim, connectivity)
     check_callable(progress, "progress", "progress(step, state)")
     steps, max_steps = check_count("steps", steps), check_count("max_steps", max_steps)

@@ -71,10 +71,10 @@ def from_manifold(manifold: Manifold, pitch: float = 1.0,
                            "; a mesh: voxelize_mesh, an array: DigitalObject")
     if isinstance(pitch, (list, tuple, np.ndarray)) and getattr(pitch, "ndim", 1) == 1 and len(pitch) not in (1, 3):
         # the object's check would ask for one number per axis, which this takes only when they are equal
-        raise IsoflowError(f"'pitch' must be one number (cubic voxels), got {given_text(list(pitch))}")
-    place = DigitalObject.placement(3, pitch=pitch, origin=origin)  # as given: checked as every object's are
+        raise IsoflowError(f"from_manifold: 'pitch' must be one number (cubic voxels), got {given_text(list(pitch))}")
+    place = DigitalObject.placement(3, pitch=pitch, origin=origin, function="from_manifold")  # as every object's are
     if np.ndim(place.pitch):
-        raise IsoflowError(f"'pitch' must be one number (cubic voxels), got {np.asarray(pitch).tolist()!r}")
+        raise IsoflowError(f"from_manifold: 'pitch' must be one number (cubic voxels), got {np.asarray(pitch).tolist()!r}")
     pitch, corner = float(place.pitch), place.origin
     mesh = manifold.to_mesh()
     verts = np.asarray(mesh.vert_properties, dtype=np.float64)[:, :3]
@@ -176,10 +176,12 @@ def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int | np.integer |
     """
     import manifold3d as m3
 
-    with one_label_at_a_time("to_manifold({})", dims=(3,)):  # a label table is no solid
-        obj = DigitalObject.of(obj)
-    if obj.ndim != 3:
-        raise IsoflowError(f"to_manifold needs a 3D object, got {obj.ndim}D")
+    # an array of another dimension is refused as that before its values: a 2D label image was told to threshold it
+    if getattr(obj, "ndim", 3) == 3:
+        with one_label_at_a_time("to_manifold({})", dims=(3,)):  # a label table is no solid
+            obj = DigitalObject.of(obj, "to_manifold")
+    if not isinstance(obj, DigitalObject) or obj.ndim != 3:
+        raise IsoflowError(f"to_manifold needs a 3D object, got {getattr(obj, 'ndim', 0)}D")
     mesh = boundary_mesh(obj.volume, connectivity)
     if len(mesh.faces) == 0:
         return m3.Manifold()

@@ -1043,10 +1043,12 @@ def write_surface(
     check = check_switch(check, "check", str(path))
     if ascii and suffix != ".ply":
         raise IsoflowError(f"{path}: ascii=True applies to .ply output only")
-    with one_label_at_a_time("write_surface({}, path)", dims=(3,)):  # a label table is no surface
-        obj = DigitalObject.of(obj)
-    if obj.ndim != 3:
-        raise IsoflowError(f"{path}: a surface is written of a 3D object, this one is {obj.ndim}D")
+    # an array of another dimension is refused as that before its values: a 2D label image was told to threshold it
+    if getattr(obj, "ndim", 3) == 3:
+        with one_label_at_a_time("write_surface({}, path)", dims=(3,)):  # a label table is no surface
+            obj = DigitalObject.of(obj, "write_surface")
+    if not isinstance(obj, DigitalObject) or obj.ndim != 3:
+        raise IsoflowError(f"{path}: a surface is written of a 3D object, this one is {getattr(obj, 'ndim', 0)}D")
     if mesh is None:
         if obj.voxels == 0:
             raise IsoflowError(f"{path}: the object is empty, there is no surface to write")

@@ -950,19 +950,20 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] | None
     resolutions = scalar_given(resolutions)  # type: ignore[assignment]  # refused below as one number
     if isinstance(resolutions, (str, bytes)) or not isinstance(resolutions, Iterable):
         hint = f"; one resolution is [{given_text(resolutions)}]" if whole_given(resolutions) is not None else ""
-        raise IsoflowError(f"resolutions must be a sequence of integers, got {given_text(resolutions)}{hint}")
+        raise IsoflowError(f"verify_genus: resolutions must be a sequence of integers, got {given_text(resolutions)}{hint}")
     resolutions = [scalar_given(r) for r in resolutions]  # type: ignore[misc]  # a 0D array of a number is that number
     if not resolutions:
         raise IsoflowError("verify_genus needs at least one resolution")
     wholes = [whole_given(r) for r in resolutions]  # int() took "32" and 32.5 (as 32) in silence
     for r, whole in zip(resolutions, wholes):
         if whole is None or whole < 1:
-            raise IsoflowError(f"resolutions must be integers >= 1, got {given_text(r)} in {given_text(resolutions)}")
+            raise IsoflowError(f"verify_genus: resolutions must be integers >= 1, got {given_text(r)} in "
+                               f"{given_text(resolutions)}")
     resolutions = wholes  # type: ignore[assignment]  # Python ints, as just checked
     # the verdict's rows and its JSON hold Python ints, whatever the caller's type
     whole = whole_given(max_resolution)
     if whole is None or whole < 1:
-        raise IsoflowError(f"max_resolution must be an integer >= 1, got {given_text(max_resolution)}")
+        raise IsoflowError(f"verify_genus: max_resolution must be an integer >= 1, got {given_text(max_resolution)}")
     max_resolution = whole
     # the connectivity a surface isoflow wrote records in its file, read once
     # for the default connectivity and the voxel-contact reference
@@ -971,7 +972,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] | None
     time_limit = scalar_given(time_limit)  # type: ignore[assignment]  # a 0D array of a number is that number
     if isinstance(time_limit, (bool, np.bool_)) or not isinstance(time_limit, (int, float, np.integer, np.floating)) \
             or not time_limit > 0:
-        raise IsoflowError(f"time_limit must be a positive number of seconds, got {given_text(time_limit)}")
+        raise IsoflowError(f"verify_genus: time_limit must be a positive number of seconds, got {given_text(time_limit)}")
     step = check_switch(step, "step", "verify_genus")
     stats: dict = {}
     name, v, f = mesh_input(mesh, stats=stats)
@@ -1029,8 +1030,8 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] | None
             time_limit=time_limit, target=target, progress=progress, on_resolution=on_resolution,
             strict=strict, fill=fill, bodies=bodies, t_junctions=t_junctions, joined=joined,
             touching=None if joined is None else touch_joined_betti(w, f, joined))
-    except IsoflowError as exc:
-        raise exc.at(name) from None  # a refused grid keeps its command-line words
+    except IsoflowError as exc:  # a refused grid keeps its command-line words
+        raise exc.called("verify_genus", "voxelize").at(name) from None
     if step and no_inside and stop is not None:
         stop = Stop("no_inside")
     stable = len(digital) >= 2 and digital[-1]["betti"] == digital[-2]["betti"]

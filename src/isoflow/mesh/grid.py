@@ -53,7 +53,7 @@ from numbers import Real
 
 import numpy as np
 
-from ..errors import IsoflowError, given_text, number_text, scalar_given, whole_given
+from ..errors import IsoflowError, called_words, given_text, number_text, scalar_given, whole_given
 from ..scale import memory
 from ..scale.memory import sized
 from .load import mesh_bbox, used_vertices
@@ -514,13 +514,18 @@ class GridTooLarge(IsoflowError):
         The Python parameter that set ``budget`` (``max_bytes``); None
         where the caller has none (the memory available, as on the
         command line).
+    caller : str or None
+        The Python function called, which the message names in the
+        command's place (:meth:`called`); None: the command's words.
     """
 
     def __init__(self, what: str, needs: str, budget: int, *, shape: tuple | None = None, beyond: str = "",
                  fit: int | float | None = None, sought: bool = False, hints: tuple[str, str] = ("", ""),
-                 store: bool = False, place: str = "voxelize: ", parameter: str | None = "max_bytes"):
+                 store: bool = False, place: str = "voxelize: ", parameter: str | None = "max_bytes",
+                 caller: str | None = None):
         self.facts = {"what": what, "needs": needs, "budget": budget, "shape": shape, "beyond": beyond, "fit": fit,
-                      "sought": sought, "hints": tuple(hints), "store": store, "place": place, "parameter": parameter}
+                      "sought": sought, "hints": tuple(hints), "store": store, "place": place, "parameter": parameter,
+                      "caller": caller}
         self.what, self.shape, self.budget, self.fit, self.store = what, shape, budget, fit, store
         super().__init__(self.words(command_line=False))
 
@@ -543,7 +548,9 @@ class GridTooLarge(IsoflowError):
             limit = f"more than the memory budget of {_bytes(budget)} (the memory available now)"
         else:
             limit = f"more than {facts['parameter']}={fmt_count(budget)}"
-        text = f"{facts['place']}{said(facts['what'])} needs {facts['needs']}, {limit}"
+        place = facts["place"] if command_line or not facts["caller"] else called_words(
+            facts["place"], facts["caller"], "voxelize")
+        text = f"{place}{said(facts['what'])} needs {facts['needs']}, {limit}"
         room = f" in {_bytes(budget)}" if command_line else ""
         fit = facts["fit"]
         if fit is not None and facts["what"].startswith("pitch="):
@@ -558,6 +565,11 @@ class GridTooLarge(IsoflowError):
     def at(self, where: object) -> GridTooLarge:
         """This refusal with ``where`` (a file, a mesh) put before it."""
         return self.but(place=f"{where}: {self.facts['place']}")
+
+    def called(self, function: str, command: str | None = None) -> GridTooLarge:
+        """This refusal as the Python API's ``function`` raises it: named
+        in the command's place, the command line's words as they were."""
+        return self.but(caller=function)
 
     def but(self, **facts) -> GridTooLarge:
         """This refusal with some of its facts changed (``hints=``,

@@ -403,6 +403,16 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     if pitch is None and resolution is None:
         resolution = 64
     check_grid_request(pitch, resolution, "voxelize_meshes")  # before the meshes are read
+    try:
+        return _voxelized_meshes(meshes, pitch, resolution, fill, overlap, split, strict, max_bytes, write_bytes,
+                                 progress)
+    except IsoflowError as exc:  # the voxeliser's refusals, which the command shares, name the function called
+        raise exc.called("voxelize_meshes", "voxelize") from None
+
+
+def _voxelized_meshes(meshes, pitch, resolution, fill, overlap, split, strict, max_bytes, write_bytes,
+                      progress) -> LabelVoxelization:
+    """:func:`voxelize_meshes` of checked switches and grid request."""
     bodies = mesh_bodies(meshes, split)
     pitch, origin, shape, what = union_grid(bodies, pitch, resolution)
     dtype = label_dtype(len(bodies))

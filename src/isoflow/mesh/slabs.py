@@ -266,8 +266,8 @@ def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: floa
         if not fits:
             raise store_refusal(v, f, what, shape, chunks, fill, budget, made, need, temporaries=True)
         chunks, slabs = slab_layout(shape, chunks)
-    except IsoflowError as exc:
-        raise exc.at(where) from None  # a refused grid keeps its kind and its command-line words
+    except IsoflowError as exc:  # a refused grid keeps its kind and its command-line words
+        raise exc.called("voxelize_to_zarr", "voxelize").at(where) from None
     import_dask()  # where dask is missing: the message that names the extra
     tell_rule(progress, plan.solid_angles)
     zarr = import_zarr()

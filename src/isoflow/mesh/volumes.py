@@ -388,6 +388,8 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
                             # read_volume_with_unit gives it as the file says it
                             "unit": raw.unit if raw.unit in LENGTH_UNITS else None, "space": raw.space}
     try:  # DigitalObject checks the metadata fields; its errors get the file's name
+        # the place first, whose refusal names no function (DigitalObject's names itself): the file's name goes before it
+        DigitalObject.placement(vol.ndim, raw.pitch, raw.origin, raw.offset, raw.parity)
         # handed over read-only with the file's array under it: an object copies a volume someone else could still write
         return DigitalObject(handed_over(vol), **{k: v for k, v in meta.items() if v is not None})
     except IsoflowError as exc:
@@ -1221,7 +1223,7 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
     path = check_path(path, "path", "write_volume",
                       hint="the object comes first: write_volume(obj, path)" if isinstance(obj, (str, os.PathLike)) else "")
     try:
-        obj = DigitalObject.of(obj)
+        obj = DigitalObject.of(obj, "write_volume")
     except NotBinary as exc:
         # an array of 0 and one other value (0/255, 0/-1, 0/0.5) is that value's mask, as the file readers
         # read the same array: what they read as a mask is written as one, and reads back as the same mask
@@ -1452,7 +1454,7 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
                            "on (a negative label is refused)")
     # the pitch and origin checked as every object's are, before the file
     # is written: the format stores whatever it is given
-    place = DigitalObject.placement(arr.ndim, pitch=pitch, origin=origin)
+    place = DigitalObject.placement(arr.ndim, pitch=pitch, origin=origin, function="write_labels")
     # a 2D image is refused as 2D by the formats that hold 3D only, before its labels are counted against theirs
     check_volume_holds(path, LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim))
     file = check_label_output(path, int(arr.max(initial=0)), force)[0]

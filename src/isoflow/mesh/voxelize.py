@@ -1103,14 +1103,18 @@ def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, 
     check_strict(strict, "voxelize_mesh")
     if pitch is not None or resolution is not None:  # neither: the default resolution
         check_grid_request(pitch, resolution, "voxelize_mesh")
-    if faces is None:
-        # a Manifold goes to mesh_arrays, which names it: it has no faces, and "faces are missing" misled
-        if not (isinstance(vertices, tuple) or hasattr(vertices, "faces") or is_scene(vertices) or is_manifold(vertices)):
-            raise IsoflowError("voxelize: faces are missing: voxelize_mesh(vertices, faces), or a mesh with vertices "
-                               "and faces (a trimesh.Trimesh or Scene) alone; a file: voxelize_file(path)")
-        vertices, faces = mesh_arrays(vertices, "voxelize")
-    obj, result = voxelized_object(vertices, faces, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
-                                   write_bytes=write_bytes, progress=progress, caller="voxelize_mesh")
+    try:
+        if faces is None:
+            # a Manifold goes to mesh_arrays, which names it: it has no faces, and "faces are missing" misled
+            if not (isinstance(vertices, tuple) or hasattr(vertices, "faces") or is_scene(vertices)
+                    or is_manifold(vertices)):
+                raise IsoflowError("voxelize: faces are missing: voxelize_mesh(vertices, faces), or a mesh with "
+                                   "vertices and faces (a trimesh.Trimesh or Scene) alone; a file: voxelize_file(path)")
+            vertices, faces = mesh_arrays(vertices, "voxelize")
+        obj, result = voxelized_object(vertices, faces, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
+                                       write_bytes=write_bytes, progress=progress, caller="voxelize_mesh")
+    except IsoflowError as exc:  # the voxeliser's refusals, which the command shares, name the function called
+        raise exc.called("voxelize_mesh", "voxelize") from None
     if details:
         return obj, result
     say_note(result.note)
@@ -1177,8 +1181,8 @@ def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolu
     try:
         obj, result = voxelized_object(v, f, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
                                        write_bytes=write_bytes, progress=progress, caller="voxelize_file")
-    except IsoflowError as exc:
-        raise exc.at(path) from None  # a refused grid keeps its kind and its command-line words
+    except IsoflowError as exc:  # a refused grid keeps its kind and its command-line words
+        raise exc.called("voxelize_file", "voxelize").at(path) from None
     unit = declared_unit(path)
     if unit is not None:  # the pitch and origin are in the file's unit, as a volume file's are
         obj = dataclasses.replace(obj, unit=unit)
