@@ -160,7 +160,7 @@ def check_grid_request(pitch: object, resolution: object, caller: str = "voxeliz
     return number, None
 
 
-def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution, caller: str = "voxelize"):
+def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
     """Pitch, origin and shape of the grid (see the module docstring), and the
     scaled frame the arithmetic runs in.
 
@@ -182,7 +182,7 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution, caller: str = "v
     (whose edge-function products would underflow to 0 or overflow) gives
     the voxels of the unscaled mesh up to the rounding of the scaling itself.
     """
-    pitch, res = check_grid_request(pitch, resolution, caller)
+    pitch, res = check_grid_request(pitch, resolution)
     lo, hi, ext = mesh_bbox(v, f, "voxelize")
     longest = float(ext.max())
     if not longest > 0:
@@ -199,7 +199,7 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution, caller: str = "v
     else:
         assert pitch is not None
         if pitch > _MAX_PITCH_RATIO * longest:
-            raise grid_refusal(caller, f"pitch={given_text(pitch)} is more than 2**40 times the mesh's size (longest "
+            raise grid_refusal("voxelize", f"pitch={given_text(pitch)} is more than 2**40 times the mesh's size (longest "
                                        f"bounding-box side {longest:.6g}): the whole mesh would lie inside one voxel")
         pitch_s = math.ldexp(pitch, -e)  # may underflow: then the grid is refused as too big
         what = f"pitch={pitch!r}"

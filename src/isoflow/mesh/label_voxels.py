@@ -178,12 +178,11 @@ def union_corners(bodies: list[Body]) -> tuple[np.ndarray, np.ndarray]:
     return corners, np.repeat(np.arange(len(corners)), 3).reshape(-1, 3)
 
 
-def union_grid(bodies: list[Body], pitch, resolution, caller: str = "voxelize_meshes"):
+def union_grid(bodies: list[Body], pitch, resolution):
     """``(pitch, origin, shape, what)`` of the grid :func:`voxel_grid` lays
-    over the union of the bodies' bounding boxes (:func:`union_corners`),
-    a refusal of ``pitch`` naming ``caller``."""
+    over the union of the bodies' bounding boxes (:func:`union_corners`)."""
     corners, used = union_corners(bodies)
-    pitch, origin, shape, what, _ = voxel_grid(corners, used, pitch, resolution, caller)
+    pitch, origin, shape, what, _ = voxel_grid(corners, used, pitch, resolution)
     check_placement(corners.min(axis=0), corners.max(axis=0), pitch, what)
     return pitch, origin, shape, what
 
@@ -418,7 +417,7 @@ def _voxelized_meshes(meshes, pitch, resolution, fill, overlap, split, strict, m
     dtype = label_dtype(len(bodies))
     windows = [body_window(b, origin, pitch, shape) for b in bodies]
     budget = memory.budget_of(max_bytes)
-    write_bytes = check_write_bytes(write_bytes, "voxelize_meshes")
+    write_bytes = check_write_bytes(write_bytes)
     extra = label_extra(shape, windows, dtype.itemsize, write_bytes)
     if not grid_fits(shape, dtype.itemsize + 0.125, extra, budget):
         raise refuse_labels(bodies, shape, what, dtype.itemsize, write_bytes, budget, extra)

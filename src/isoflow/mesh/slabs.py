@@ -248,7 +248,7 @@ def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: floa
     # a file names itself in its errors
     v, f = load_mesh(source) if isinstance(source, (str, os.PathLike)) else mesh_arrays(source, where)
     try:
-        v, f, shape, what, frame, origin, pitch = plan_voxels(v, f, pitch=pitch, resolution=resolution, caller="voxelize_to_zarr")
+        v, f, shape, what, frame, origin, pitch = plan_voxels(v, f, pitch=pitch, resolution=resolution)
         budget = memory.budget_of(max_bytes)
         solid = None
 

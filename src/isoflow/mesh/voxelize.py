@@ -683,13 +683,12 @@ def winding_volume(T: np.ndarray, pitch: float, balanced: bool, stats) -> float 
     return own if own > 0 else None
 
 
-def plan_voxels(vertices, faces, *, pitch=None, resolution=None, grid=None, caller: str = "voxelize"):
+def plan_voxels(vertices, faces, *, pitch=None, resolution=None, grid=None):
     """Check the mesh and lay out the grid (nothing O(grid) is done):
     ``(v, f, shape, what, frame, origin, pitch)`` with the checked arrays and
-    the scaled frame of :func:`isoflow.mesh.grid.voxel_grid`, whose refusal
-    of ``pitch`` or ``resolution`` names ``caller``."""
+    the scaled frame of :func:`isoflow.mesh.grid.voxel_grid`."""
     v, f = check_mesh(vertices, faces, where="voxelize")
-    pitch, origin, shape, what, frame = voxel_grid(v, f, pitch, resolution, caller)
+    pitch, origin, shape, what, frame = voxel_grid(v, f, pitch, resolution)
     shift, e, origin_s, pitch_s = frame
     if grid is None:
         lo, hi, _ = mesh_bbox(v, f, "voxelize")
@@ -735,22 +734,20 @@ def grid_block(shape, window) -> tuple[tuple[int, int, int], tuple[int, ...]]:
 def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
              fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | np.integer | None = None,
              write_bytes: float = 0, progress: Callable[[int, int], object] | None = None,
-             details: Literal[False] = False, t_junctions: bool = True,
-             caller: str = "voxelize") -> tuple[np.ndarray, np.ndarray, float]: ...
+             details: Literal[False] = False, t_junctions: bool = True) -> tuple[np.ndarray, np.ndarray, float]: ...
 
 
 @overload
 def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
              fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | np.integer | None = None,
              write_bytes: float = 0, progress: Callable[[int, int], object] | None = None,
-             details: Literal[True], t_junctions: bool = True, caller: str = "voxelize") -> Voxelization: ...
+             details: Literal[True], t_junctions: bool = True) -> Voxelization: ...
 
 
 def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
              fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | np.integer | None = None,
              write_bytes: float = 0, progress: Callable[[int, int], object] | None = None,
-             details: bool = False, t_junctions: bool = True,
-             caller: str = "voxelize") -> tuple[np.ndarray, np.ndarray, float] | Voxelization:
+             details: bool = False, t_junctions: bool = True) -> tuple[np.ndarray, np.ndarray, float] | Voxelization:
     """Voxelise a triangle mesh: the solid it bounds, its shell, or both.
 
     Parameters
@@ -826,9 +823,6 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
         boundary vertices tried against the open edges) is not made again;
         :func:`~isoflow.mesh.genus.verify_genus` makes it once for all its
         resolutions.
-    caller
-        The function called, which a refusal of ``pitch`` or
-        ``resolution`` names (``voxelize_mesh``, ``voxelize_file``).
 
     Returns
     -------
@@ -869,11 +863,11 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
     t_junctions = check_switch(t_junctions, "t_junctions", "voxelize")
     check_callable(progress, "progress", "progress(done, total)")
     v, f, shape, what, frame, origin, pitch = plan_voxels(
-        vertices, faces, pitch=pitch, resolution=resolution, grid=grid, caller=caller)
+        vertices, faces, pitch=pitch, resolution=resolution, grid=grid)
     start, shape = grid_block(shape, window)
     origin = origin + pitch * np.asarray(start, dtype=np.float64)
     budget = memory.budget_of(max_bytes)
-    write_bytes = check_write_bytes(write_bytes, caller)
+    write_bytes = check_write_bytes(write_bytes)
     solid: Solid | None = None
 
     def made() -> Solid:  # the mesh made ready once, for the grid asked and for those a refusal tries
@@ -939,9 +933,9 @@ def in_memory(solid: Solid, frame, shape, budget: int, start=(0, 0, 0),
     return grid_fits(shape, 1, temp, budget), plan, temp
 
 
-def check_write_bytes(write_bytes: object, caller: str = "voxelize") -> float:
+def check_write_bytes(write_bytes: object) -> float:
     """``write_bytes`` as given, a finite number from 0 on; anything else
-    is refused naming it and ``caller``, the function called.
+    is refused naming it.
 
     Examples
     --------
@@ -955,7 +949,7 @@ def check_write_bytes(write_bytes: object, caller: str = "voxelize") -> float:
     write_bytes = scalar_given(write_bytes)  # a 0D array of a number is that number
     ok = isinstance(write_bytes, (int, float, np.integer, np.floating)) and not isinstance(write_bytes, (bool, np.bool_))
     if not ok or not 0 <= float(write_bytes) < float("inf"):  # type: ignore[arg-type]
-        raise IsoflowError(f"{caller}: write_bytes must be a number of bytes per voxel from 0 on, got {given_text(write_bytes)}")
+        raise IsoflowError(f"voxelize: write_bytes must be a number of bytes per voxel from 0 on, got {given_text(write_bytes)}")
     return float(write_bytes)  # type: ignore[arg-type]
 
 
@@ -1014,27 +1008,28 @@ def say_note(note: str | None) -> None:
 
 
 def voxelized_object(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None, resolution: int | np.integer | None,
-                     fill: Fill, strict: bool, write_bytes: float, progress: Progress | None,
-                     caller: str) -> tuple[DigitalObject, Voxelization]:
+                     fill: Fill, strict: bool, write_bytes: float,
+                     progress: Progress | None) -> tuple[DigitalObject, Voxelization]:
     """The mesh's :class:`~isoflow.results.DigitalObject` and its
     :class:`~isoflow.mesh.fills.Voxelization`, for :func:`voxelize_mesh`
     and :func:`voxelize_file`: at ``resolution=DEFAULT_RESOLUTION`` where
-    neither ``pitch`` nor ``resolution`` is given, a refusal naming
-    ``caller``.
+    neither ``pitch`` nor ``resolution`` is given (its refusals name the
+    command: each function renames them,
+    :meth:`~isoflow.errors.IsoflowError.called`).
 
     Examples
     --------
     >>> import trimesh
     >>> box = trimesh.creation.box((2, 2, 2))
     >>> obj, v = voxelized_object(box.vertices, box.faces, pitch=None, resolution=4, fill="winding", strict=False,
-    ...                           write_bytes=0, progress=None, caller="voxelize_mesh")
+    ...                           write_bytes=0, progress=None)
     >>> obj.voxels, obj.pitch
     (64, 0.5)
     """
     if pitch is None and resolution is None:
         resolution = DEFAULT_RESOLUTION
     result = voxelize(vertices, faces, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
-                      write_bytes=write_bytes, progress=progress, details=True, caller=caller)
+                      write_bytes=write_bytes, progress=progress, details=True)
     assert result.volume is not None  # voxelize keeps the voxels in memory unless given a store
     # the voxeliser's array, which nothing writes again: held as it is, not copied
     return DigitalObject(handed_over(result.volume), pitch=result.pitch, origin=result.origin), result
@@ -1112,7 +1107,7 @@ def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, 
                                    "vertices and faces (a trimesh.Trimesh or Scene) alone; a file: voxelize_file(path)")
             vertices, faces = mesh_arrays(vertices, "voxelize")
         obj, result = voxelized_object(vertices, faces, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
-                                       write_bytes=write_bytes, progress=progress, caller="voxelize_mesh")
+                                       write_bytes=write_bytes, progress=progress)
     except IsoflowError as exc:  # the voxeliser's refusals, which the command shares, name the function called
         raise exc.called("voxelize_mesh", "voxelize") from None
     if details:
@@ -1180,7 +1175,7 @@ def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolu
     v, f = load_mesh(path)
     try:
         obj, result = voxelized_object(v, f, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
-                                       write_bytes=write_bytes, progress=progress, caller="voxelize_file")
+                                       write_bytes=write_bytes, progress=progress)
     except IsoflowError as exc:  # a refused grid keeps its kind and its command-line words
         raise exc.called("voxelize_file", "voxelize").at(path) from None
     unit = declared_unit(path)
