@@ -16,7 +16,7 @@ import numpy as np
 
 from ..scale.jit import njit
 from ..scale.kernels import find, union
-from .crossing_kernels import segment_crosses_triangle
+from .crossing_kernels import segment_crossing_side
 from .cube_grid import CubeGrid
 
 #: Fibonacci hashing of a face's vertex set: the key times 2**64 / golden
@@ -522,16 +522,7 @@ def _told_by_rays(scene: _RayScene, fate: np.ndarray, sheet: np.ndarray, value: 
     faces = np.flatnonzero(todo[sheet])
     if len(faces) == 0:
         return np.full(n_sheets, -1, np.int8)
-    # up to RAY_FACES faces of each sheet, spread over its faces in file
-    # order (neighbours in a file are often neighbours on the surface)
-    faces = faces[np.argsort(sheet[faces], kind="stable")]
-    s = sheet[faces]
-    begin = np.flatnonzero(np.r_[True, s[1:] != s[:-1]])
-    size = np.diff(np.r_[begin, len(s)])
-    rays = np.minimum(size, RAY_FACES)
-    group = np.repeat(np.arange(len(begin)), rays)
-    step = np.arange(len(group)) - np.repeat(np.cumsum(rays) - rays, rays)
-    faces = faces[begin[group] + step * size[group] // rays[group]]
+    faces = spread_faces(faces, sheet[faces], RAY_FACES)[0]
     kept = scene.tri[:len(sheet)]
     normal = np.cross(kept[faces, 1] - kept[faces, 0], kept[faces, 2] - kept[faces, 0])
     # a point inside each face, away from its edges and from the lines
@@ -555,10 +546,10 @@ def _told_by_rays(scene: _RayScene, fate: np.ndarray, sheet: np.ndarray, value: 
     weight = np.ones(len(scene.tri), np.int8)
     weight[:len(sheet)] = np.where(value[sheet] >= 0, value[sheet], known)
     g = scene.grid
-    parity = _ray_parities(scene.tri, weight, origin, end, axis.astype(np.int64), faces[face_of].astype(np.int64),
-                           g.origin, float(g.cube), g.dims.astype(np.int64), g.start, g.size, g.key, g.box,
-                           RAY_WORK[0] * len(scene.tri) + RAY_WORK[1])
-    parity[~beyond] = -1
+    count, stopped = ray_crossings(scene.tri, weight, origin, end, axis.astype(np.int64), faces[face_of].astype(np.int64),
+                                   g.origin, float(g.cube), g.dims.astype(np.int64), g.start, g.size, g.key, g.box,
+                                   RAY_WORK[0] * len(scene.tri) + RAY_WORK[1], False)
+    parity = np.where(stopped | ~beyond, -1, count % 2)
     # per sheet, side (the one the kept face faces, the other) and parity: seen?
     ok = parity >= 0
     seen = np.zeros((4, n_sheets), bool)
@@ -571,17 +562,55 @@ def _told_by_rays(scene: _RayScene, fate: np.ndarray, sheet: np.ndarray, value: 
     return told
 
 
+def spread_faces(faces: np.ndarray, group: np.ndarray, most: int) -> tuple[np.ndarray, np.ndarray]:
+    """Up to ``most`` of ``faces`` of each group, spread over its faces in
+    file order (neighbours in a file are often neighbours on the surface),
+    and each one's group as a rank among the groups (in increasing order).
+
+    Parameters
+    ----------
+    faces, group : int ndarray (K,)
+        Faces and the group of each.
+    most : int
+
+    Returns
+    -------
+    chosen, rank : int64 ndarray (J,)
+
+    Examples
+    --------
+    >>> chosen, rank = spread_faces(np.arange(7), np.array([5, 5, 5, 5, 2, 5, 5]), 2)
+    >>> chosen.tolist(), rank.tolist()
+    ([4, 0, 3], [0, 1, 1])
+    """
+    faces = np.asarray(faces, dtype=np.int64)
+    order = np.argsort(group, kind="stable")
+    faces, g = faces[order], np.asarray(group)[order]
+    begin = np.flatnonzero(np.r_[True, g[1:] != g[:-1]]) if len(g) else np.zeros(0, np.int64)
+    size = np.diff(np.r_[begin, len(g)])
+    rays = np.minimum(size, most)
+    rank = np.repeat(np.arange(len(begin)), rays)
+    step = np.arange(len(rank)) - np.repeat(np.cumsum(rays) - rays, rays)
+    return faces[begin[rank] + step * size[rank] // rays[rank]], rank
+
+
 @njit(cache=True, nogil=True)
-def _ray_parities(tri, weight, ray_from, ray_to, ray_axis, ray_own, origin, cube, dims, start, size, key, box, budget):
-    # ray r runs from ray_from[r] to ray_to[r] along axis ray_axis[r],
-    # beside its own triangle ray_own[r]. Each ray's crossings with the
-    # triangles of weight 1, mod 2; -1 where it crosses or touches one of
-    # weight -1, or touches one of weight 1 (weight 0: not there). Each ray
-    # walks the grid's cubes (CubeGrid: the triangles of each cube from
-    # start, size) from its start and stops at the first triangle that
-    # stops it; past ``budget`` triangles looked at, the rays left are -1
+def ray_crossings(tri, weight, ray_from, ray_to, ray_axis, ray_own, origin, cube, dims, start, size, key, box, budget,
+                  signed):
+    """Each ray's crossings with the triangles of weight 1 (``signed``:
+    their sum of :func:`~isoflow.mesh.crossing_kernels.segment_crossing_side`,
+    the winding number of its start where they close), and whether it
+    stopped: crossed or touched one of weight -1, or touched one of weight
+    1 (weight 0: not there). Ray r runs from ``ray_from[r]`` to
+    ``ray_to[r]`` along axis ``ray_axis[r]``, beside its own triangle
+    ``ray_own[r]``; it walks the cubes of a
+    :class:`~isoflow.mesh.cube_grid.CubeGrid` (the triangles of each cube
+    from ``start``, ``size``) from its start and stops at the first
+    triangle that stops it. Past ``budget`` triangles looked at, the rays
+    left are stopped."""
     n_rays = len(ray_from)
-    parity = np.zeros(n_rays, np.int64)
+    count = np.zeros(n_rays, np.int64)
+    halted = np.zeros(n_rays, np.bool_)
     seen = np.full(len(weight), -1, np.int64)  # the last ray that looked at each triangle
     cubes = key[start]
     c = np.empty(3, np.int64)
@@ -589,7 +618,7 @@ def _ray_parities(tri, weight, ray_from, ray_to, ray_axis, ray_own, origin, cube
     work = 0
     for r in range(n_rays):
         if work > budget:
-            parity[r] = -1
+            halted[r] = True
             continue
         k = ray_axis[r]
         i, j = (k + 1) % 3, (k + 2) % 3
@@ -620,20 +649,19 @@ def _ray_parities(tri, weight, ray_from, ray_to, ray_axis, ray_own, origin, cube
                     for m in range(3):
                         for n in range(3):
                             x[m, n] = tri[t, m, n]
-                    s = segment_crosses_triangle(x, 3, 4, 0, 1, 2)
+                    s = segment_crossing_side(x, 3, 4, 0, 1, 2)
                     if s == 0:
                         continue
-                    if s == 1 and weight[t] == 1:
-                        parity[r] ^= 1
+                    if (s == 1 or s == -1) and weight[t] == 1:
+                        count[r] += s if signed else 1
                     else:
                         stopped = True
                         break
             if stopped or c[k] == last:
                 break
             c[k] += step
-        if stopped:
-            parity[r] = -1
-    return parity
+        halted[r] = stopped
+    return count, halted
 
 
 @njit(cache=True, nogil=True)

@@ -185,6 +185,24 @@ def segment_crosses_triangle(x, p, q, t0, t1, t2):
     >>> int(segment_crosses_triangle(x, 3, 4, 0, 1, 2)), int(segment_crosses_triangle(x, 4, 5, 0, 1, 2))
     (1, 0)
     """
+    s = segment_crossing_side(x, p, q, t0, t1, t2)
+    return 1 if s == -1 else s
+
+
+@njit(cache=True, nogil=True)
+def segment_crossing_side(x, p, q, t0, t1, t2):
+    """:func:`segment_crosses_triangle` with the way it crosses: 1 from
+    the triangle's back to its front (the side its normal
+    ``(t1 - t0) x (t2 - t0)`` points to), -1 from front to back; 0 and
+    :data:`UNDECIDED` as there. Summed along a ray from a point to beyond
+    a closed mesh, the signs are the point's winding number.
+
+    Examples
+    --------
+    >>> x = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.2, 0.2, -1], [0.2, 0.2, 1]], float)
+    >>> int(segment_crossing_side(x, 3, 4, 0, 1, 2)), int(segment_crossing_side(x, 4, 3, 0, 1, 2))
+    (1, -1)
+    """
     # the line through p and q misses the closed triangle where two of
     # these signs are opposite, and meets its inside where all three agree;
     # the line first, so that a triangle beside the line whose plane passes
@@ -200,7 +218,7 @@ def segment_crosses_triangle(x, p, q, t0, t1, t2):
         return 0  # both ends on one side
     if sp == UNDECIDED or sq == UNDECIDED or sp == 0 or sq == 0 or s1 == 0 or s2 == 0 or s3 == 0:
         return UNDECIDED
-    return 1
+    return -sq  # orient3d is negative for a point in front (on the normal's side)
 
 
 @njit(cache=True, nogil=True)
