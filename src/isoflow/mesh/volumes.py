@@ -561,6 +561,9 @@ def read_labels(path: str | os.PathLike, *, time: int | np.integer | None = None
         try:
             arr = as_labels(arr, fill=raw.fill)
         except IsoflowError as exc:
+            if raw.scaling is not None:  # "holds 0.5" of a file that stores 1: the header made it so
+                raise IsoflowError(f"{path}: {exc}; the values are read through {raw.scaling}, not as "
+                                   "stored") from None
             raise exc.at(path) from None
     elif arr.dtype.kind not in "biu":
         raise IsoflowError(f"{path}: holds {arr.dtype} values, not labels")

@@ -35,6 +35,7 @@ size and origin as they are (not converted to mm).
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -122,7 +123,44 @@ def image_volume(img, where: str) -> RawVolume:
              f"at (i dx, j dy, k dz), not by nibabel's fallback affine (x mirrored, centred on 0){said}")
     unit = length_unit(img.header.get_xyzt_units()[0])  # 'mm', 'micron', 'meter' or 'unknown' (none)
     forms_disagree(img.header, img.shape, where, unit)
-    return placed_by_affine(data, affine, where, unit, space)
+    return dataclasses.replace(placed_by_affine(data, affine, where, unit, space), scaling=scaling_read(img.dataobj))
+
+
+def scaling_read(dataobj) -> str | None:
+    """The header's scaling the values are read through, in words that
+    name its fields, or None where they are read as stored: a label image
+    stored 1, 3 under ``scl_slope`` 0.5 is read as 0.5, 1.5, which a
+    refusal of 0.5 must trace to the header, not to the stored labels.
+
+    Parameters
+    ----------
+    dataobj : nibabel.arrayproxy.ArrayProxy or numpy.ndarray
+        The image's ``dataobj``: its ``slope`` and ``inter`` are the
+        scaling nibabel applies (an array in memory has none).
+
+    Returns
+    -------
+    str or None
+        ``"its header's scl_slope 0.5 and scl_inter 0 (value = 0.5 x
+        stored + 0, as the NIfTI standard, nibabel and ITK read it)"``, or
+        None for a slope of 1 and an intercept of 0.
+
+    Examples
+    --------
+    >>> import nibabel
+    >>> img = nibabel.Nifti1Image(np.ones((2, 2, 2), np.int16), np.eye(4))
+    >>> img.header.set_slope_inter(0.5, 0)
+    >>> scaling_read(nibabel.Nifti1Image.from_bytes(img.to_bytes()).dataobj)
+    "its header's scl_slope 0.5 and scl_inter 0 (value = 0.5 x stored + 0, as the NIfTI standard, nibabel and ITK \
+read it)"
+    >>> scaling_read(np.zeros(2)) is None
+    True
+    """
+    slope, inter = float(getattr(dataobj, "slope", 1.0)), float(getattr(dataobj, "inter", 0.0))
+    if slope == 1 and inter == 0:
+        return None
+    return (f"its header's scl_slope {slope:g} and scl_inter {inter:g} (value = {slope:g} x stored "
+            f"{'-' if inter < 0 else '+'} {abs(inter):g}, as the NIfTI standard, nibabel and ITK read it)")
 
 
 def zero_scaled(dataobj, where: str) -> float:
