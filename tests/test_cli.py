@@ -894,6 +894,31 @@ def test_info_json_of_voxels_of_1e150_is_json_and_prints_no_numpy_warning(tmp_pa
     assert report["bbox"] == [0.0, 0.0, 0.0] + [3 * 1e150] * 3
 
 
+def test_info_and_surface_say_the_same_volume_beyond_float64(tmp_path, capsys):
+    """Voxels of 1e200: info printed "volume inf, surface area inf" where
+    surface's read-back says "volume 2.7e+601". info prints the figure
+    (27 voxels of 1e200 cubed, as exact fractions give it) and words for
+    an area beyond float64, never a bare inf; trimesh's read-back, which
+    surface compares, says the same figure."""
+    from decimal import Decimal
+    from fractions import Fraction
+
+    from isoflow import DigitalObject, write_volume
+
+    write_volume(DigitalObject(np.ones((3, 3, 3), bool), pitch=1e200), tmp_path / "huge.npz")
+    exact = 27 * Fraction(1e200) ** 3
+    figure = f"{Decimal(exact.numerator // exact.denominator):.5e}"  # an int, beyond float: Decimal formats it
+    mantissa, exponent = figure.split("e")
+    figure = f"{mantissa.rstrip('0').rstrip('.')}e+{int(exponent)}"
+    assert figure == "2.7e+601"
+    assert main(["info", str(tmp_path / "huge.npz")]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.strip().startswith("volume"))
+    assert line.split() == ["volume", figure, "(beyond", "float64),", "surface", "area", "beyond", "float64's", "range"]
+    assert "inf" not in line
+    assert main(["surface", str(tmp_path / "huge.npz"), "-o", str(tmp_path / "s.ply")]) == 0
+    assert f"volume {figure} (beyond float64" in capsys.readouterr().out
+
+
 def test_quiet_before_the_command_means_what_it_means_after_it(tmp_path, capsys):
     """`isoflow -q info x.npy` was refused as an unrecognized argument:
     -q/--quiet, which every command takes, is taken before the command's

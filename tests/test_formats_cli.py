@@ -189,6 +189,56 @@ def test_a_nifti_mask_is_read_with_its_header_scaling_said_where_it_moves_0(tmp_
         assert json.loads(r.stdout)["voxels"] == np.count_nonzero(values) == mask.size - 18
 
 
+def test_nifti_labels_made_fractions_by_scl_slope_are_refused_naming_it(tmp_path):
+    """Labels stored 1 and 3 under scl_slope 0.5 read (as nibabel reads
+    them) 0.5 and 1.5: refused as "holds 0.5: not a whole number" with no
+    word of the header, as if the stored labels were fractions. The
+    refusal names scl_slope and its value; under slope 2 the labels are
+    nibabel's 2 and 6."""
+    labels = np.zeros((6, 6, 6), np.int16)
+    labels[1:3, 1:3, 1:3], labels[3:5, 3:5, 3:5] = 1, 3
+    for slope in (0.5, 2.0):
+        img = nib.Nifti1Image(labels, np.eye(4))
+        img.header.set_slope_inter(slope, 0)
+        nib.save(img, tmp_path / f"seg{slope}.nii")
+    read = np.asanyarray(nib.load(tmp_path / "seg0.5.nii").dataobj)
+    assert sorted(np.unique(read).tolist()) == [0, 0.5, 1.5]
+    r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "seg0.5.nii"), "--labels"],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert "holds 0.5: not a whole number" in r.stderr and "scl_slope 0.5 and scl_inter 0" in r.stderr, r.stderr
+    r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "seg2.0.nii"), "--labels", "--json"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    scaled = np.asanyarray(nib.load(tmp_path / "seg2.0.nii").dataobj)
+    assert [row["label"] for row in json.loads(r.stdout)["labels"]] == [2, 6] == sorted(np.unique(scaled)[1:].tolist())
+
+
+@pytest.mark.parametrize("qform_code", [1, 0])
+def test_a_nifti_sform_of_zeros_is_named_and_its_qform_read(tmp_path, qform_code):
+    """An sform of zeros under sform_code 1 was refused as "voxel-to-world
+    map [[0.0, ...]] has a zero voxel size", naming no header field. It is
+    named (sform_code, srow_x..z); the qform places the image where it has
+    one (qform_code > 0, as ITK reads it: the volume is nibabel's qform
+    voxel size cubed times the voxels), else it is refused in one line."""
+    mask = np.zeros((6, 6, 6), np.uint8)
+    mask[1:4, 1:4, 1:4] = 1
+    img = nib.Nifti1Image(mask, None)
+    img.header.set_qform(np.diag([2.0, 2.0, 2.0, 1.0]), code=qform_code)
+    img.header.set_sform(np.zeros((4, 4)), code=1)
+    nib.save(img, tmp_path / "zs.nii")
+    assert not nib.load(tmp_path / "zs.nii").affine[:3, :3].any()  # nibabel's own map: every voxel at one point
+    r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "zs.nii"), "--json"],
+                       capture_output=True, text=True)
+    assert r.stderr.count("\n") == 1 and "sform_code 1, srow_x [0.0, 0.0, 0.0, 0.0]" in r.stderr, r.stderr
+    if qform_code == 0:
+        assert r.returncode == 2 and "qform_code is 0" in r.stderr, r.stderr
+        return
+    assert r.returncode == 0 and f"placed by its qform (qform_code {qform_code})" in r.stderr, r.stderr
+    voxel = np.linalg.norm(img.header.get_qform()[:3, :3], axis=0)
+    assert json.loads(r.stdout)["volume"] == pytest.approx(mask.sum() * voxel.prod())
+
+
 def test_a_2d_slice_off_the_world_xy_plane_says_which_world_axes_it_runs_along(tmp_path):
     """A 2D NIfTI slice whose affine runs its axes along world y and z (a
     sagittal slice), or a 2D NRRD in a 3D space along x and z (coronal),

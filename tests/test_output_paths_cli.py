@@ -472,3 +472,37 @@ def test_a_surface_into_a_directory_or_a_bare_suffix_says_which(tmp_path, monkey
     p = run_here("surface", "v.npy", *output, "--force", "-q")
     assert p.returncode == 2 and p.stderr == f"isoflow surface: error: {words}\n", p.stderr
     assert sorted(f.name for f in tmp_path.iterdir()) == ["out", "v.npy"]
+
+
+@pytest.mark.parametrize(("output", "words"), [
+    (".nii.gz", ".nii.gz: is a suffix alone, with no name before it; give the file's name, e.g. volume.nii.gz"),
+    (".NPY", ".NPY: is a suffix alone, with no name before it; give the file's name, e.g. volume.NPY"),
+    (".tif", ".tif: is a suffix alone, with no name before it; give the file's name, e.g. volume.tif"),
+    (".zarr", ".zarr: is a suffix alone, with no name before it; give the file's name, e.g. volume.zarr"),
+    (".ome.zarr", ".ome.zarr: is a suffix alone, with no name before it; give the file's name, e.g. volume.ome.zarr"),
+    ("-", "-: a volume is written to a file, not to stdout; give its name, e.g. volume.nii.gz"),
+])
+def test_a_volume_named_by_a_bare_suffix_or_dash_is_refused_as_a_surface_is(tmp_path, monkeypatch, output, words):
+    # voxelize -o .nii.gz wrote a hidden file named ".nii.gz" (and .zarr a hidden store), exit 0
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(TORUS, "torus.obj")
+    p = run_here("voxelize", "torus.obj", "--resolution", "8", "-o", output, "-q")
+    assert p.returncode == 2 and p.stderr == f"isoflow voxelize: error: {words}\n", p.stderr
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["torus.obj"]
+
+
+def test_write_volume_write_labels_and_info_csv_refuse_a_bare_suffix(tmp_path, monkeypatch):
+    import isoflow
+    from isoflow.errors import IsoflowError
+
+    monkeypatch.chdir(tmp_path)
+    labels = np.ones((3, 3, 3), np.uint8)
+    with pytest.raises(IsoflowError, match=r"^\.tif: is a suffix alone"):
+        isoflow.write_labels(labels, ".tif")
+    with pytest.raises(IsoflowError, match=r"^-: a volume is written to a file, not to stdout"):
+        isoflow.write_volume(labels.astype(bool), "-")
+    np.save("seg.npy", labels)
+    p = run_here("info", "seg.npy", "--labels", "--csv", ".csv", "-q")
+    assert p.returncode == 2 and p.stderr.endswith(": .csv: is a suffix alone, with no name before it; give the file's "
+                                                   "name, e.g. table.csv\n"), p.stderr
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["seg.npy"]

@@ -3,6 +3,7 @@ and its value, never NumPy's own error nor a file written as given."""
 
 import os
 import re
+import shutil
 import warnings
 from decimal import Decimal
 from fractions import Fraction
@@ -1887,6 +1888,29 @@ def test_flow_chunked_refuses_a_directory_that_is_a_file(tmp_path):
         flow_chunked(tmp_path / "in.zarr", tmp_path / "out")
     assert str(info.value) == f"{tmp_path / 'out'}: the directory for the step stores is not a directory"
     assert (tmp_path / "out").read_bytes() == b"mine"
+
+
+def test_flow_chunked_force_keeps_a_users_directory_named_as_a_step_store(tmp_path):
+    """force=True removed any ``step_*.zarr`` in the directory, a folder of
+    the user's holding no zarr store too (the command line refuses one):
+    it is refused, untouched; a real store of an earlier run still goes."""
+    zarr = pytest.importorskip("zarr")
+    from isoflow.flow.chunked import flow_chunked
+
+    zarr.open_array(str(tmp_path / "in.zarr"), mode="w", shape=(3, 3, 3), chunks=(2, 2, 2), dtype="u1")[...] = 1
+    mine = tmp_path / "out" / "step_000.zarr"
+    mine.mkdir(parents=True)
+    (mine / "notes.txt").write_text("mine")
+    with pytest.raises(IsoflowError) as info:
+        flow_chunked(tmp_path / "in.zarr", tmp_path / "out", steps=1, force=True)
+    assert str(info.value).startswith(f"{mine}: a directory that is not a step store of a run; force=True")
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["step_000.zarr"]
+    assert (mine / "notes.txt").read_text() == "mine"
+    earlier = zarr.open_array(str(tmp_path / "out" / "step_005.zarr"), mode="w", shape=(1,), dtype="u1")
+    shutil.rmtree(mine)
+    flow_chunked(tmp_path / "in.zarr", tmp_path / "out", steps=1, force=True)
+    assert earlier is not None and not (tmp_path / "out" / "step_005.zarr").exists()
+    assert zarr.open(str(tmp_path / "out" / "step_000.zarr"), mode="r") is not None  # a store zarr reads
 
 
 @pytest.mark.parametrize(("name", "voxelize"), [

@@ -570,3 +570,25 @@ def test_a_path_or_an_object_given_for_the_array_says_what_to_pass(tmp_path):
     write_surface_blocks(vol.tolist(), tmp_path / "c.ply", scheduler="sync")
     m = trimesh.load(tmp_path / "c.ply", process=False)
     assert (len(m.vertices), len(m.faces), bool(m.is_watertight), float(m.volume)) == (26, 48, True, 8.0)
+
+
+def test_a_zarr_array_given_in_python_is_named_by_its_path_not_zarr_s_url(tmp_path, monkeypatch):
+    """write_surface_blocks and analyze_chunked of a zarr array opened from
+    a path (no ``where``) named it ``file://z2.zarr``, zarr 3's URL of the
+    store, which no shell takes: the path, as zarr was given it (a level
+    of an OME-Zarr image: IMAGE.zarr/0)."""
+    from isoflow.digital.outofcore import analyze_chunked
+
+    monkeypatch.chdir(tmp_path)
+    volume = np.zeros((8, 8, 8), np.uint8)
+    volume[2:6, 2:6, 2:6] = 1
+    volume[3, 3, 3] = 7  # not binary: the refusal names the input
+    zarr.open_array("z2.zarr", mode="w", shape=volume.shape, chunks=(4, 4, 4), dtype="u1")[...] = volume
+    zarr.open_group("img.zarr", mode="w").create_array("0", shape=volume.shape, chunks=(4, 4, 4), dtype="u1")[...] = volume
+    for opened, name in ((zarr.open_array("z2.zarr", mode="r"), "z2.zarr"),
+                         (zarr.open_group("img.zarr", mode="r")["0"], os.path.join("img.zarr", "0"))):
+        for run, given in ((write_surface_blocks, ("s.ply",)), (analyze_chunked, ())):
+            with pytest.raises(IsoflowError) as info:
+                run(opened, *given)
+            assert str(info.value).startswith(f"{name}: not a binary volume"), str(info.value)
+    assert not Path("s.ply").exists()

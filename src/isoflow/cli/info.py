@@ -300,6 +300,56 @@ def finite_or_null(report: dict) -> dict:
     return {key: finite(value) for key, value in report.items()}
 
 
+def measure_text(value: float, voxels: int | None = None, step=None, dimension: int = 3) -> str:
+    """A measure as the report prints it: to 6 digits, or where float64
+    holds no such number (a volume of voxels of 1e200: inf) the figure
+    from exact decimal arithmetic where it is ``voxels`` voxels of sizes
+    ``step`` (as ``surface``'s read-back gives the volume), said to be
+    beyond float64; else the words alone, never a bare ``inf``.
+
+    Parameters
+    ----------
+    value : float
+        The measure, float64.
+    voxels : int, optional
+        The voxels whose sizes multiply to it (the volume, or the area in
+        2D); None for a measure of faces (the surface area).
+    step : float or sequence of float, optional
+        The voxel size, one for every axis or one per axis.
+    dimension : int
+        The number of axes.
+
+    Returns
+    -------
+    str
+        The text.
+
+    Examples
+    --------
+    >>> measure_text(8.0)
+    '8'
+    >>> measure_text(float("inf"), 27, [1e200, 1e200, 1e200])
+    '2.7e+601 (beyond float64)'
+    >>> measure_text(float("inf"))
+    "beyond float64's range"
+    """
+    from decimal import Decimal, localcontext
+
+    if math.isfinite(value):
+        return f"{value:.6g}"
+    if voxels is None or step is None:
+        return "beyond float64's range"
+    sizes = list(step) if hasattr(step, "__len__") else [step] * dimension
+    with localcontext() as ctx:
+        ctx.prec = 40
+        exact = Decimal(int(voxels))
+        for size in sizes[:dimension]:
+            exact *= Decimal(float(size))
+        ctx.prec = 6
+        exact = (+exact).normalize()
+    return f"{exact:g} (beyond float64)"
+
+
 def format_measures(r: Report, step=None) -> list[str]:
     """The world measures in two lines, in the report's unit (none said
     where it has none); coordinates to within a 200th of ``step``, the
@@ -310,7 +360,8 @@ def format_measures(r: Report, step=None) -> list[str]:
     unit = f" {r.unit}" if r.unit else ""
     # the boundary's unit: squared in 3D (an area), a length in 2D
     power = {size: f"{unit}^{r.dimension}" if unit else "", boundary: f"{unit}^2" if unit and r.dimension == 3 else unit}
-    lines = [f"  {size:<23}{r[size]:.6g}{power[size]}, {boundary.replace('_', ' ')} {r[boundary]:.6g}{power[boundary]}"]
+    lines = [f"  {size:<23}{measure_text(r[size], r.voxels, step, r.dimension)}{power[size]}, "
+             f"{boundary.replace('_', ' ')} {measure_text(r[boundary])}{power[boundary]}"]
     if r.bbox is None:
         lines.append("  bounding box           none (no voxels)")
     else:

@@ -560,13 +560,14 @@ def _some(values, most: int = 8) -> str:
 
 def cmd_info_labels(args: argparse.Namespace) -> int:
     """``isoflow info LABELS --labels``."""
-    from ..mesh.outputs import check_output_path, check_picture_path, output_set
+    from ..mesh.outputs import check_output_path, check_picture_path, output_set, refuse_nameless
     from ..scale.compiled import using
 
     to_stdout = args.csv == "-"
     if to_stdout and args.json:
         raise IsoflowError(f"{args.input}: --csv - and --json both print on stdout: give one of them")
     if args.csv and not to_stdout:
+        refuse_nameless(args.csv, (".csv",), "table")  # "--csv .csv" wrote a hidden file of no name
         check_output_path(args.csv, args.force)
     if args.png:
         check_picture_path(args.png, args.force)

@@ -76,6 +76,7 @@ from ..scale.chunks import (
     layer_axes,
     never_written,
     smaller_blocks_help,
+    store_name,
     unwritten_fill,
     zarr_blocks,
     zarr_volume,
@@ -287,7 +288,7 @@ def _checked(array, where: str | os.PathLike | None) -> tuple[tuple[int, ...], s
     if not is_zarr and not isinstance(array, import_dask()[1].Array):
         raise IsoflowError(f"analyze_chunked needs a dask or zarr array, got {type(array).__name__}; {_instead(array)}")
     if where is None:
-        where = str(getattr(array, "store_path", None) or getattr(array, "path", "zarr array")) if is_zarr else "dask array"
+        where = store_name(array, str(getattr(array, "path", None) or "zarr array")) if is_zarr else "dask array"
     elif isinstance(where, os.PathLike):
         where = os.fsdecode(where)
     elif not isinstance(where, str):

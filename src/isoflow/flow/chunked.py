@@ -707,6 +707,8 @@ def clear_earlier_run(directory: Path, force: bool) -> None:
     >>> import tempfile
     >>> folder = Path(tempfile.mkdtemp())
     >>> (folder / "step_000.zarr").mkdir()
+    >>> (folder / "step_000.zarr" / "zarr.json").write_text("{}")
+    2
     >>> clear_earlier_run(folder, force=False)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
@@ -714,7 +716,11 @@ def clear_earlier_run(directory: Path, force: bool) -> None:
     >>> clear_earlier_run(folder, force=True); list(folder.iterdir())
     []
     """
+    from .files import refuse_foreign_step
+
     earlier = sorted(directory.glob("step_*.zarr")) if directory.is_dir() else []
+    for store in earlier:  # all checked before any goes: force replaces a run's stores, never a folder of the user's
+        refuse_foreign_step(store)
     if earlier and not force:
         raise IsoflowError(f"{directory}: holds the stores of an earlier run ({earlier[0].name}"
                            f"{f' and {len(earlier) - 1} more' if len(earlier) > 1 else ''}); give an empty directory, "

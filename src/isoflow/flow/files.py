@@ -120,6 +120,42 @@ def _is_zarr_store(path: Path) -> bool:
     return any((path / mark).exists() for mark in (".zgroup", ".zarray", "zarr.json"))
 
 
+def refuse_foreign_step(taken: Path) -> None:
+    """Refuse ``taken``, a path a run replaces (``step_001.zarr``), where it
+    is a directory of the user's: ``force`` replaces a run's files (a step
+    store, a file, a link, unlinked and what it leads to kept), never a
+    directory that is not a ``.zarr`` store.
+
+    Parameters
+    ----------
+    taken : Path
+        A path bearing a step's or a run file's name in the output directory.
+
+    Raises
+    ------
+    IsoflowError
+        Where ``taken`` is a directory, not a link, and not a zarr store.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> mine = Path(tempfile.mkdtemp()) / "step_000.zarr"
+    >>> mine.mkdir()
+    >>> refuse_foreign_step(mine)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: ...step_000.zarr: a directory that is not a step store of a run; force=True ...
+    >>> (mine / "zarr.json").write_text("{}"); refuse_foreign_step(mine)
+    2
+    """
+    if taken.is_dir() and not taken.is_symlink() and not (taken.suffix.lower() == ".zarr" and _is_zarr_store(taken)):
+        raise IsoflowError.worded(
+            f"{taken}: a directory that is not a step store of a run; force=True replaces a run's files, not it: "
+            "move it, or give another directory",
+            f"{taken}: a directory that is not a step store of a run; flow --force replaces a run's files, not it: "
+            "move it, or give --out another directory")
+
+
 def replaced_by_run(directory, path) -> bool:
     """Whether a run into ``directory`` (with ``force``) replaces or removes
     the file ``path``: a step file of any suffix, flow.csv or a picture
@@ -257,12 +293,7 @@ def check_output_dir(directory, force: bool = False):
                                   f"{out}: directory is not empty; pass --force to overwrite its files")
     if out.is_dir():
         for taken in _run_names(out):
-            # --force replaces a run's files, never a directory of the user's that bears one's name; a link
-            # of that name is the run's to remove (unlinked, what it leads to kept), whatever it leads to
-            if taken.is_dir() and not taken.is_symlink() and not (taken.suffix.lower() == ".zarr"
-                                                                  and _is_zarr_store(taken)):
-                raise IsoflowError(f"{taken}: a directory that is not a step store of a run; flow --force "
-                                   "replaces a run's files, not it: move it, or give --out another directory")
+            refuse_foreign_step(taken)
     parent = out if out.is_dir() else next((p for p in out.parents if p.exists()), Path("."))
     check_writable_dir(parent, f"the flow's files ({out})")
     return out

@@ -59,18 +59,53 @@ def check_output_path(
     if path.is_dir():  # --force must not mean "replace a directory"
         raise IsoflowError(f"{path}: is a directory; give a file name for the {what}")
     if suffixes and path.suffix.lower() not in suffixes:
-        if str(path) == "-":  # the shell's convention for stdout, which no file is streamed to
-            raise IsoflowError(f"-: a {what} is written to a file, not to stdout; give its name, e.g. "
-                               f"{what.split()[-1]}{suffixes[0]}")
-        if path.name.lower() in suffixes:  # ".ply" (an empty $name in "$name.ply"): a hidden name of no suffix
-            raise IsoflowError(f"{path}: is a suffix alone, with no name before it; give the file's name, e.g. "
-                               f"{path.with_name(what.split()[-1] + path.name)}")
+        refuse_nameless(path, suffixes, what)
         raise IsoflowError(f"{path}: {what} must end in {' or '.join(suffixes)}{near_suffix_hint(path, suffixes)}")
     if (path.exists() or path.is_symlink()) and not force:  # a dangling link is there too
         raise IsoflowError.worded(f"{path}: exists; pass force=True to overwrite",
                                       f"{path}: exists; pass --force to overwrite")
     check_writable_dir(path.parent, f"the {what} {path.name}")
     return path
+
+
+def refuse_nameless(path: str | os.PathLike, suffixes: Iterable[str], what: str = "output") -> None:
+    """Refuse an output named ``-`` or by one of ``suffixes`` alone.
+
+    ``-`` is the shell's word for stdout, which no file is streamed to; a
+    name that is a suffix alone (``.ply``, an empty ``$name`` in
+    ``$name.ply``) would be written as a hidden file of no suffix.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output as given.
+    suffixes : iterable of str
+        The suffixes the output may end in, lower case with their dot; the
+        first names the example in the refusal.
+    what : str
+        What is written (``"surface"``, ``"volume"``), named in the refusal.
+
+    Raises
+    ------
+    IsoflowError
+        For ``-`` or a name that is one of ``suffixes`` (any case).
+
+    Examples
+    --------
+    >>> refuse_nameless("seg.nii.gz", (".nii.gz",), "volume")
+    >>> refuse_nameless(".nii.gz", (".npy", ".nii.gz"), "volume")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: .nii.gz: is a suffix alone, with no name before it; give the file's name, e.g. volume.nii.gz
+    """
+    suffixes = tuple(suffixes)
+    path = Path(path)
+    if str(path) == "-":
+        raise IsoflowError(f"-: a {what} is written to a file, not to stdout; give its name, e.g. "
+                           f"{what.split()[-1]}{suffixes[0] if suffixes else ''}")
+    if path.name.lower() in suffixes:
+        raise IsoflowError(f"{path}: is a suffix alone, with no name before it; give the file's name, e.g. "
+                           f"{path.with_name(what.split()[-1] + path.name)}")
 
 
 def near_suffix_hint(path: Path, suffixes: tuple[str, ...]) -> str:

@@ -42,7 +42,7 @@ from .formats.omezarr import multiscales
 from .grid import GridTooLarge, check_grid_request, finest_fit, fmt_count, grid_words
 from .load import load_mesh, mesh_arrays
 from .mesh_units import declared_unit
-from .outputs import atomic_path, check_writable_dir
+from .outputs import atomic_path, check_writable_dir, refuse_nameless
 from .store_plan import WORKERS, check_chunks, in_store, slab_chunks, slab_layout, store_need
 
 
@@ -51,6 +51,7 @@ def check_store_path(path, force: bool) -> Path:
     replaced only with ``force``, and only if it is a zarr store (never an
     arbitrary directory)."""
     check_switch(force, "force", str(path))
+    refuse_nameless(path, (".zarr", ".ome.zarr"), "volume")  # ".ome.zarr" is a hidden name, no store's suffix
     path = Path(path)
     if path.suffix.lower() != ".zarr":
         raise IsoflowError(f"{path}: a zarr store must end in .zarr")

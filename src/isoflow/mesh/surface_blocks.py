@@ -49,7 +49,7 @@ from ..digital.surface import QuadMesh, row_tables, triangle_rows
 from ..errors import IsoflowError
 from ..scale.arrays import NotBinary, as_array, binary, fill_value_named, index_dtype, refuse_object
 from ..scale.chunkcache import ChunkReader
-from ..scale.chunks import BlockTicks, decoded_chunk_voxels, is_zarr_array, smaller_blocks_help
+from ..scale.chunks import BlockTicks, decoded_chunk_voxels, is_zarr_array, smaller_blocks_help, store_name
 from ..scale.compiled import using
 from .export import (
     STL_DTYPE,
@@ -682,7 +682,7 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     from ..digital.connectivity import resolve_connectivity
     from ..scale.compiled import thread_count
 
-    where = where or str(getattr(array, "store_path", None) or "volume")
+    where = where or store_name(array, "volume")
     out = _checked_output(path, force)
     # a path (the store's, as the command takes it), an object or a mesh: AttributeError 'str' object has no
     # attribute 'shape'

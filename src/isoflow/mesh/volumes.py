@@ -40,7 +40,7 @@ from .formats.registry import (
     volume_suffixes,
 )
 from .formats.text_encoding import utf16_order
-from .outputs import atomic_path, check_output_path, refuse_directory_spelling
+from .outputs import atomic_path, check_output_path, refuse_directory_spelling, refuse_nameless
 
 #: every volume suffix read_volume takes (see isoflow.mesh.formats.registry)
 VOLUME_SUFFIXES = volume_suffixes()
@@ -561,6 +561,9 @@ def read_labels(path: str | os.PathLike, *, time: int | np.integer | None = None
         try:
             arr = as_labels(arr, fill=raw.fill)
         except IsoflowError as exc:
+            if raw.scaling is not None:  # "holds 0.5" of a file that stores 1: the header made it so
+                raise IsoflowError(f"{path}: {exc}; the values are read through {raw.scaling}, not as "
+                                   "stored") from None
             raise exc.at(path) from None
     elif arr.dtype.kind not in "biu":
         raise IsoflowError(f"{path}: holds {arr.dtype} values, not labels")
@@ -1082,6 +1085,8 @@ def check_volume_output(path: str | os.PathLike, force: bool = False, ndim: int 
     """
     check_switch(force, "force", str(path))
     file, dataset = split_dataset(path)
+    # ".nii.gz" wrote a hidden file of no name and "-" a file named "-": refused as surfaces refuse them
+    refuse_nameless(file, (".nii.gz", *volume_suffixes(writable=True)), "volume")
     fmt = format_for(file, writing=True)
     if fmt is None and Path(file).is_dir():  # "-o out/": say it is a directory, not only which suffixes are written
         raise IsoflowError(f"{path}: is a directory; give a file name for the volume, ending in "

@@ -236,6 +236,39 @@ def is_zarr_array(array) -> bool:
     )
 
 
+def store_name(array: Any, default: str) -> str:
+    """The name of a zarr array's store as a user gave its path: the
+    directory of a local store (``z2.zarr``, ``IMAGE.zarr/0`` for a level),
+    not zarr 3's URL of it (``file://z2.zarr``), which no shell or
+    ``open`` takes; another store's URL (``memory://...``) as zarr gives
+    it; ``default`` for an array of no store.
+
+    Parameters
+    ----------
+    array : object
+        A zarr array (or :class:`SpatialAxes` of one), or anything else.
+    default : str
+        The name where ``array`` has no ``store_path``.
+
+    Returns
+    -------
+    str
+        The name messages give the input.
+
+    Examples
+    --------
+    >>> store_name(object(), "volume")
+    'volume'
+    """
+    store_path = getattr(array, "store_path", None)
+    if not store_path:
+        return default
+    root = getattr(getattr(store_path, "store", None), "root", None)  # a LocalStore's directory
+    if root is None:
+        return str(store_path)
+    return os.path.join(os.fsdecode(root), store_path.path) if store_path.path else os.fsdecode(root)
+
+
 def decoded_chunk_voxels(array: Any) -> int:
     """Voxels of the largest chunk that a read of any part of ``array``
     decodes whole: zarr decodes a whole chunk (an inner chunk of a shard)

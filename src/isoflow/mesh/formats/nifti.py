@@ -35,6 +35,7 @@ size and origin as they are (not converted to mm).
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -121,8 +122,48 @@ def image_volume(img, where: str) -> RawVolume:
         note(f"{where}: no qform or sform (both codes 0): placed by the NIfTI standard's method 1, voxel (i, j, k) "
              f"at (i dx, j dy, k dz), not by nibabel's fallback affine (x mirrored, centred on 0){said}")
     unit = length_unit(img.header.get_xyzt_units()[0])  # 'mm', 'micron', 'meter' or 'unknown' (none)
-    forms_disagree(img.header, img.shape, where, unit)
-    return placed_by_affine(data, affine, where, unit, space)
+    if int(img.header["sform_code"]) > 0 and not np.abs(affine[:3, :3]).max(axis=0).all():
+        affine = sform_without_size(img.header, where)
+    else:
+        forms_disagree(img.header, img.shape, where, unit)
+    return dataclasses.replace(placed_by_affine(data, affine, where, unit, space), scaling=scaling_read(img.dataobj))
+
+
+def scaling_read(dataobj) -> str | None:
+    """The header's scaling the values are read through, in words that
+    name its fields, or None where they are read as stored: a label image
+    stored 1, 3 under ``scl_slope`` 0.5 is read as 0.5, 1.5, which a
+    refusal of 0.5 must trace to the header, not to the stored labels.
+
+    Parameters
+    ----------
+    dataobj : nibabel.arrayproxy.ArrayProxy or numpy.ndarray
+        The image's ``dataobj``: its ``slope`` and ``inter`` are the
+        scaling nibabel applies (an array in memory has none).
+
+    Returns
+    -------
+    str or None
+        ``"its header's scl_slope 0.5 and scl_inter 0 (value = 0.5 x
+        stored + 0, as the NIfTI standard, nibabel and ITK read it)"``, or
+        None for a slope of 1 and an intercept of 0.
+
+    Examples
+    --------
+    >>> import nibabel
+    >>> img = nibabel.Nifti1Image(np.ones((2, 2, 2), np.int16), np.eye(4))
+    >>> img.header.set_slope_inter(0.5, 0)
+    >>> scaling_read(nibabel.Nifti1Image.from_bytes(img.to_bytes()).dataobj)
+    "its header's scl_slope 0.5 and scl_inter 0 (value = 0.5 x stored + 0, as the NIfTI standard, nibabel and ITK \
+read it)"
+    >>> scaling_read(np.zeros(2)) is None
+    True
+    """
+    slope, inter = float(getattr(dataobj, "slope", 1.0)), float(getattr(dataobj, "inter", 0.0))
+    if slope == 1 and inter == 0:
+        return None
+    return (f"its header's scl_slope {slope:g} and scl_inter {inter:g} (value = {slope:g} x stored "
+            f"{'-' if inter < 0 else '+'} {abs(inter):g}, as the NIfTI standard, nibabel and ITK read it)")
 
 
 def zero_scaled(dataobj, where: str) -> float:
@@ -161,6 +202,57 @@ def zero_scaled(dataobj, where: str) -> float:
          f"{slope:g} x stored {sign} {abs(inter):g}, as the NIfTI standard, nibabel and ITK read it): the voxels stored "
          f"0 are not background; a mask stored 0/1 is read as {inter:g}/{slope + inter:g}")
     return inter
+
+
+def sform_without_size(header, where: str) -> np.ndarray:
+    """The qform's voxel-to-world map of a header whose sform (code above
+    0) gives an axis no voxel size (its ``srow_x``, ``srow_y``,
+    ``srow_z`` all 0 in that column, an sform of zeros as some writers
+    leave it), said in a warning; refused where the qform's code is 0.
+
+    nibabel takes such an sform and places every voxel at one point; ITK
+    reads the qform where the sform is no rotation and voxel size, and so
+    does isoflow, naming the fields.
+
+    Parameters
+    ----------
+    header : nibabel.Nifti1Header
+        The image's header.
+    where : str
+        The file, named in the warning or the refusal.
+
+    Returns
+    -------
+    numpy.ndarray
+        The qform's 4x4 map, float64.
+
+    Raises
+    ------
+    IsoflowError
+        Where ``qform_code`` is 0: the file has no placement to read.
+
+    Examples
+    --------
+    >>> import nibabel
+    >>> header = nibabel.Nifti1Header()
+    >>> header.set_sform(np.zeros((4, 4)), code=2)
+    >>> sform_without_size(header, "a.nii")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: a.nii: its sform (sform_code 2, ...) gives axes 0, 1, 2 no voxel size (srow_x, ...
+    """
+    sform = header.get_sform().astype(np.float64)
+    flat = [i for i in range(3) if not np.abs(sform[:3, i]).any()]
+    rows = ", ".join(f"srow_{a} {sform[i].tolist()}" for i, a in enumerate("xyz"))
+    axes = f"{'axis' if len(flat) == 1 else 'axes'} {', '.join(map(str, flat))}"
+    said = (f"its sform (sform_code {int(header['sform_code'])}, {rows}) gives {axes} no "
+            f"voxel size (srow_x, srow_y and srow_z 0 in {'that column' if len(flat) == 1 else 'those columns'})")
+    if int(header["qform_code"]) <= 0:
+        raise IsoflowError(f"{where}: {said}, and its qform_code is 0: no placement to read (nibabel takes the sform "
+                           "and places every voxel at one point); set sform_code 0 to place it by pixdim")
+    note(f"{where}: {said}: placed by its qform (qform_code {int(header['qform_code'])}), as ITK reads it (nibabel "
+         "takes the sform and places every voxel at one point)")
+    return header.get_qform().astype(np.float64)
 
 
 def forms_disagree(header, shape, where: str, unit: str | None) -> float:

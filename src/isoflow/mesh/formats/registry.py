@@ -368,6 +368,10 @@ class RawVolume:
     said: Callable[[object], str | None] | None = None
     #: what each label is, label value to name, where the file records it
     names: dict[int, str] | None = None
+    #: the header's scaling the values were read through, as a refusal of
+    #: a value names it (NIfTI's ``scl_slope 0.5 and scl_inter 0``); None
+    #: where the values are as stored
+    scaling: str | None = None
 
 
 def axis_units(units, where: str, what: str) -> tuple[np.ndarray, str | None]:
