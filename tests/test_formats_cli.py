@@ -181,7 +181,8 @@ def test_a_nifti_mask_is_read_with_its_header_scaling_said_where_it_moves_0(tmp_
         assert r.returncode == 0 and not said, r.stderr
         assert json.loads(r.stdout)["voxels"] == np.count_nonzero(values) == 18
         return
-    assert len(said) == 1 and f"scl_inter {inter:g} read a stored 0 as {inter:g}" in said[0], r.stderr
+    assert len(said) == 1, r.stderr
+    assert f"scl_inter {inter:g} (value = " in said[0] and f"reads a stored 0 as {inter:g}:" in said[0], r.stderr
     if np.unique(values).tolist() == [1.0, 2.0]:  # two values beside no 0: no mask
         assert r.returncode == 2 and "not a binary volume" in r.stderr
     else:

@@ -549,11 +549,17 @@ class VoxelPlan:
         :data:`SLAB_VOXELS`; eight times that for a shell, and for a mesh
         without a cap, which need no temporaries of a slab's size and whose
         every slab looks at each triangle)."""
+        rows = max(1, self.slab_rows(voxels))
+        return [(a, min(a + rows, self.shape[0])) for a in range(0, self.shape[0], rows)]
+
+    def slab_rows(self, voxels: int | None = None) -> int:
+        """Rows of the largest of :meth:`slabs` (at most the grid's), found
+        without the list: a grid too large to fill has millions of rows,
+        which a refusal's search for the finest grid that fits tries."""
         if voxels is None:
             voxels = SLAB_VOXELS if self.solid_angles else 8 * SLAB_VOXELS
         nx, ny, nz = self.shape
-        rows = max(1, voxels // max(1, ny * nz))
-        return [(a, min(a + rows, nx)) for a in range(0, nx, rows)]
+        return min(nx, max(1, voxels // max(1, ny * nz)))
 
     def shellcounted(self) -> int:
         """Voxels of the mesh's shell on this grid that hold some of the
@@ -929,7 +935,7 @@ def in_memory(solid: Solid, frame, shape, budget: int, start=(0, 0, 0),
     if not grid_fits(shape, 1, 0, budget):
         return False, None, 0
     plan = solid.prepare(frame, frame[2], frame[3], shape, start)
-    temp = max(plan.slab_bytes(max(b - a for a, b in plan.slabs())), grid_need(shape, write_bytes))
+    temp = max(plan.slab_bytes(plan.slab_rows()), grid_need(shape, write_bytes))
     return grid_fits(shape, 1, temp, budget), plan, temp
 
 

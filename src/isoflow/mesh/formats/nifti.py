@@ -197,10 +197,8 @@ def zero_scaled(dataobj, where: str) -> float:
     slope, inter = float(getattr(dataobj, "slope", 1.0)), float(getattr(dataobj, "inter", 0.0))
     if inter == 0 or not np.isfinite(inter):
         return 0.0
-    sign = "-" if inter < 0 else "+"
-    note(f"{where}: its header's scl_slope {slope:g} and scl_inter {inter:g} read a stored 0 as {inter:g} (value = "
-         f"{slope:g} x stored {sign} {abs(inter):g}, as the NIfTI standard, nibabel and ITK read it): the voxels stored "
-         f"0 are not background; a mask stored 0/1 is read as {inter:g}/{slope + inter:g}")
+    note(f"{where}: {scaling_read(dataobj)} reads a stored 0 as {inter:g}: the voxels stored 0 are not background; a "
+         f"mask stored 0/1 is read as {inter:g}/{slope + inter:g}")
     return inter
 
 
