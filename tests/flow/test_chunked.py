@@ -924,7 +924,7 @@ def test_no_command_refusal_names_what_only_python_takes(tmp_path, capsys, monke
 
     plain_store(tmp_path / "in.zarr", crossing_volume(), (8, 8, 8))
     refused = 0
-    for budget in np.geomspace(4_000, 200_000, 24).astype(int):
+    for budget in np.geomspace(4_000, 200_000, 10).astype(int):
         monkeypatch.setattr(memory, "default_budget", lambda b=budget: int(b))
         status = main(["flow", str(tmp_path / "in.zarr"), "--out", str(tmp_path / f"run{budget}"), "--volumes", ".zarr",
                        "--steps", "1", "-q"])
@@ -934,7 +934,7 @@ def test_no_command_refusal_names_what_only_python_takes(tmp_path, capsys, monke
             assert status == 2 and len(err.strip().splitlines()) == 1, err
             assert "slab=" not in err and "flow_chunked(" not in err, err
             assert err.count("workers=") == err.count("--threads "), err
-    assert refused >= 6  # the sweep reaches the refusals
+    assert 3 <= refused < 10, refused  # the sweep reaches the refusals, and the runs past them
 
 
 @pytest.mark.parametrize("bad", ["0", "x", "-1", "1.5"])
