@@ -567,7 +567,7 @@ def cmd_info_labels(args: argparse.Namespace) -> int:
     if to_stdout and args.json:
         raise IsoflowError(f"{args.input}: --csv - and --json both print on stdout: give one of them")
     if args.csv and not to_stdout:
-        refuse_nameless(args.csv, (".csv",), "table")  # "--csv .csv" wrote a hidden file of no name
+        refuse_nameless(args.csv, (".csv",), "table")  # "--csv .csv" would write a hidden file of no name
         check_output_path(args.csv, args.force)
     if args.png:
         check_picture_path(args.png, args.force)

@@ -176,7 +176,7 @@ def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int | np.integer |
     """
     import manifold3d as m3
 
-    # an array of another dimension is refused as that before its values: a 2D label image was told to threshold it
+    # the dimension before the values: "threshold it" is no remedy for a 2D label image
     if getattr(obj, "ndim", 3) == 3:
         with one_label_at_a_time("to_manifold({})", dims=(3,)):  # a label table is no solid
             obj = DigitalObject.of(obj, "to_manifold")

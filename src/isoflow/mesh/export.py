@@ -1043,7 +1043,7 @@ def write_surface(
     check = check_switch(check, "check", str(path))
     if ascii and suffix != ".ply":
         raise IsoflowError(f"{path}: ascii=True applies to .ply output only")
-    # an array of another dimension is refused as that before its values: a 2D label image was told to threshold it
+    # the dimension before the values: "threshold it" is no remedy for a 2D label image
     if getattr(obj, "ndim", 3) == 3:
         with one_label_at_a_time("write_surface({}, path)", dims=(3,)):  # a label table is no surface
             obj = DigitalObject.of(obj, "write_surface")

@@ -234,7 +234,7 @@ def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: floa
     from .voxelize import Solid, plan_voxels, say_note, tell_rule, voxelization
 
     fill, strict = check_fill(fill, "voxelize_to_zarr"), check_strict(strict, "voxelize_to_zarr")
-    # details="yes" returned the pair, as True does: refused, as voxelize_mesh refuses it
+    # details="yes" would return the pair, as True does: refused, as voxelize_mesh refuses it
     details = check_switch(details, "details", "voxelize_to_zarr")
     check_grid_request(pitch, resolution, "voxelize_to_zarr")  # before the mesh is read, whose name the errors below carry
     check_callable(progress, "progress", "progress(done, total)")

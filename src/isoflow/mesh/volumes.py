@@ -1085,7 +1085,7 @@ def check_volume_output(path: str | os.PathLike, force: bool = False, ndim: int 
     """
     check_switch(force, "force", str(path))
     file, dataset = split_dataset(path)
-    # ".nii.gz" wrote a hidden file of no name and "-" a file named "-": refused as surfaces refuse them
+    # ".nii.gz" would write a hidden file of no name and "-" a file named "-": refused as surfaces refuse them
     refuse_nameless(file, (".nii.gz", *volume_suffixes(writable=True)), "volume")
     fmt = format_for(file, writing=True)
     if fmt is None and Path(file).is_dir():  # "-o out/": say it is a directory, not only which suffixes are written

@@ -101,7 +101,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         sizes = [int(s) for s in header["sizes"]]
         check_shape(sizes, np.uint8, where)
         if str(header.get("type", "")).lower() == "block":
-            # opaque blocks: pynrrd failed on them as "negative dimensions are not allowed"
+            # opaque blocks: pynrrd fails on them as "negative dimensions are not allowed"
             raise IsoflowError(f"{where}: NRRD field 'type' is 'block' (opaque blocks of "
                                f"{header.get('block size', header.get('blocksize', '?'))} bytes), no numbers; "
                                "isoflow reads NRRD of a number type")

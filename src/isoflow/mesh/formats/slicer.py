@@ -463,7 +463,7 @@ def read_header(fh) -> dict:
         lines.append(line)
         if _LIST_LINE.match(line):
             # the format's "data file: LIST": every line after it names a data file, no field;
-            # read as fields they failed as "not enough values to unpack"
+            # read as fields they would fail as "not enough values to unpack"
             line = b""
             break
     header = nrrd.read_header(lines + [line])
