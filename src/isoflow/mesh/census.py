@@ -485,17 +485,12 @@ RAY_FACES = 2
 class _RayScene:
     """What the rays of :func:`_told_by_rays` look at, round after round:
     the kept faces (one per pair) and then the unpaired faces, as corner
-    coordinates (K, 3, 3), their box and the grid of cubes that holds
-    them (:class:`~isoflow.mesh.cube_grid.CubeGrid`)."""
+    coordinates (K, 3, 3), and the grid of cubes that holds them
+    (:class:`~isoflow.mesh.cube_grid.CubeGrid`)."""
 
     def __init__(self, kept: np.ndarray, single: np.ndarray) -> None:
         self.tri = np.ascontiguousarray(np.concatenate([kept, single]), dtype=np.float64)
-        t = self.tri
-        low = np.minimum(np.minimum(t[:, 0], t[:, 1]), t[:, 2])
-        high = np.maximum(np.maximum(t[:, 0], t[:, 1]), t[:, 2])
-        self.lo, self.hi = low.min(axis=0), high.max(axis=0)
-        self.reach = float(np.max(self.hi - self.lo))
-        self.grid = CubeGrid(low, high, compiled=True)
+        self.grid = CubeGrid(self.tri.min(axis=1), self.tri.max(axis=1), compiled=True)
 
 
 def _told_by_rays(scene: _RayScene, fate: np.ndarray, sheet: np.ndarray, value: np.ndarray,
@@ -525,31 +520,17 @@ def _told_by_rays(scene: _RayScene, fate: np.ndarray, sheet: np.ndarray, value: 
     faces = spread_faces(faces, sheet[faces], RAY_FACES)[0]
     kept = scene.tri[:len(sheet)]
     normal = np.cross(kept[faces, 1] - kept[faces, 0], kept[faces, 2] - kept[faces, 0])
-    # a point inside each face, away from its edges and from the lines
-    # that split a square into two triangles; on an axis-aligned face it
-    # lies on the face exactly (the normal's coordinate is a corner's)
-    t = kept[faces]
-    start = t[:, 0] + 0.3141 * (t[:, 1] - t[:, 0]) + 0.2113 * (t[:, 2] - t[:, 0])
+    start = face_points(kept[faces])
     face_of, axis = np.nonzero(normal != 0)
     face_of, axis = np.repeat(face_of, 2), np.repeat(axis, 2)
     direction = np.tile([1, -1], len(axis) // 2)
     side = np.sign(normal[face_of, axis]).astype(np.int64) * direction
-    origin = start[face_of]
-    end = origin.copy()
-    rows = np.arange(len(axis))
-    lo, hi = scene.lo, scene.hi
-    with np.errstate(over="ignore", invalid="ignore"):
-        end[rows, axis] = np.where(direction > 0, hi[axis] + scene.reach, lo[axis] - scene.reach)
-    # an end not beyond every face (the mesh far from the origin) touches one: such rays tell nothing
-    beyond = np.where(direction > 0, end[rows, axis] > hi[axis], end[rows, axis] < lo[axis]) & np.isfinite(end).all(axis=1)
     known = np.where(todo[sheet], -1, fate)  # an open sheet's pairs: as they will be read
     weight = np.ones(len(scene.tri), np.int8)
     weight[:len(sheet)] = np.where(value[sheet] >= 0, value[sheet], known)
-    g = scene.grid
-    count, stopped = ray_crossings(scene.tri, weight, origin, end, axis.astype(np.int64), faces[face_of].astype(np.int64),
-                                   g.origin, float(g.cube), g.dims.astype(np.int64), g.start, g.size, g.key, g.box,
-                                   RAY_WORK[0] * len(scene.tri) + RAY_WORK[1], False)
-    parity = np.where(stopped | ~beyond, -1, count % 2)
+    count, told = axis_rays(scene.tri, weight, start[face_of], axis, direction, faces[face_of], scene.grid,
+                            RAY_WORK[0] * len(scene.tri) + RAY_WORK[1], False)
+    parity = np.where(told, count % 2, -1)
     # per sheet, side (the one the kept face faces, the other) and parity: seen?
     ok = parity >= 0
     seen = np.zeros((4, n_sheets), bool)
@@ -560,6 +541,76 @@ def _told_by_rays(scene: _RayScene, fate: np.ndarray, sheet: np.ndarray, value: 
     told[sure & (even_front | even_back)] = 1
     told[sure & odd_front & odd_back & ~even_front & ~even_back] = 0
     return told
+
+
+def face_points(t: np.ndarray) -> np.ndarray:
+    """A point inside each face (corners ``t``, (K, 3, 3)) that rays start
+    from: away from its edges and from the line that splits a square into
+    two triangles; on an axis-aligned face it lies on the face exactly
+    (the normal's coordinate is a corner's).
+
+    Examples
+    --------
+    >>> face_points(np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], float)).tolist()
+    [[0.3141, 0.2113, 0.0]]
+    """
+    return t[:, 0] + 0.3141 * (t[:, 1] - t[:, 0]) + 0.2113 * (t[:, 2] - t[:, 0])
+
+
+def axis_rays(tri: np.ndarray, weight: np.ndarray, start: np.ndarray, axis: np.ndarray, towards: np.ndarray,
+              own: np.ndarray, grid: CubeGrid, work: int, signed: bool) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`ray_crossings` of rays from ``start`` along ``axis``, to the
+    side ``towards`` (+1 or -1) says, to past the triangles' box; and which
+    of them tell (neither stopped, nor ending short of the box: a mesh so
+    far from the origin that the end rounds onto it touches a face).
+
+    Parameters
+    ----------
+    tri : float64 ndarray (K, 3, 3)
+        The triangles, C-contiguous.
+    weight : int8 ndarray (K,)
+        As :func:`ray_crossings` takes it.
+    start : float ndarray (R, 3)
+    axis, towards, own : ndarray (R,)
+        Each ray's axis, direction and own triangle (left out).
+    grid : CubeGrid
+        The compiled grid of the triangles' boxes.
+    work : int
+        The triangles the rays may look at in all.
+    signed : bool
+        Count the crossings' signs (a winding number), not their number.
+
+    Returns
+    -------
+    count : int64 ndarray (R,)
+    told : bool ndarray (R,)
+
+    Examples
+    --------
+    From inside a cube of two triangles a side, off the diagonals that
+    split them, a ray along +x crosses one face, and the winding number
+    there is 1.
+
+    >>> import trimesh
+    >>> box = trimesh.creation.box((2, 2, 2))
+    >>> tri = np.ascontiguousarray(box.vertices[box.faces], dtype=np.float64)
+    >>> grid = CubeGrid(tri.min(axis=1), tri.max(axis=1), compiled=True)
+    >>> count, told = axis_rays(tri, np.ones(12, np.int8), np.array([[0, 0.3, 0.1]]), np.array([0]), np.array([1]),
+    ...                         np.array([-1]), grid, 1000, True)
+    >>> count.tolist(), told.tolist()
+    ([1], [True])
+    """
+    lo, hi = grid.lo.min(axis=0), grid.hi.max(axis=0)  # the triangles' box, from their own boxes in the grid
+    reach = float(np.max(hi - lo))
+    rows = np.arange(len(axis))
+    end = np.array(start, dtype=np.float64)
+    with np.errstate(over="ignore", invalid="ignore"):
+        end[rows, axis] = np.where(towards > 0, hi[axis] + reach, lo[axis] - reach)
+    beyond = np.where(towards > 0, end[rows, axis] > hi[axis], end[rows, axis] < lo[axis]) & np.isfinite(end).all(axis=1)
+    count, stopped = ray_crossings(tri, weight, np.asarray(start, np.float64), end, np.asarray(axis, np.int64),
+                                   np.asarray(own, np.int64), grid.origin, float(grid.cube), grid.dims.astype(np.int64),
+                                   grid.start, grid.size, grid.key, grid.box, work, signed)
+    return count, ~stopped & beyond
 
 
 def spread_faces(faces: np.ndarray, group: np.ndarray, most: int) -> tuple[np.ndarray, np.ndarray]:

@@ -411,16 +411,14 @@ def nested_shells(corners: np.ndarray, turn: np.ndarray, group: np.ndarray, clos
     shell = (group >= 0) & (closed >= 0)
     if not shell.any() or len(np.unique(closed[closed >= 0])) < 2:
         return turn
-    from .census import ray_crossings, spread_faces
+    from .census import axis_rays, face_points, spread_faces
     from .crossings import crossing_pairs
     from .cube_grid import CubeGrid
 
     turn = turn.copy()
     inside = np.flatnonzero(closed >= 0)
     c = corners[inside]
-    low, high = c.min(axis=1), c.max(axis=1)
-    lo, hi = low.min(axis=0), high.max(axis=0)
-    grid = CubeGrid(low, high, compiled=True)
+    grid = CubeGrid(c.min(axis=1), c.max(axis=1), compiled=True)
     faces_of = np.flatnonzero(shell[inside])
     own, which = spread_faces(faces_of, group[inside][faces_of], SHELL_RAYS)
     names = np.unique(group[inside][faces_of])  # the groups, as ranked in ``which``
@@ -429,27 +427,16 @@ def nested_shells(corners: np.ndarray, turn: np.ndarray, group: np.ndarray, clos
     axis = np.argmax(np.abs(normal), axis=1)
     keep = normal[np.arange(len(own)), axis] != 0  # a face without area starts no ray
     own, axis, which, t, normal = own[keep], axis[keep], which[keep], t[keep], normal[keep]
-    rows = np.arange(len(own))
-    # a point inside each face, away from its edges and from the line that
-    # splits a square into two triangles
-    start = t[:, 0] + 0.3141 * (t[:, 1] - t[:, 0]) + 0.2113 * (t[:, 2] - t[:, 0])
-    ahead = np.sign(normal[rows, axis])  # as given: a turned face faces the other way
-    reach = float(np.max(hi - lo))
+    start = face_points(t)
+    ahead = np.sign(normal[np.arange(len(own)), axis])  # as given: a turned face faces the other way
     crossing = None
     weight = np.ones(len(inside), np.int8)
     for _ in range(SHELL_ROUNDS):
         flip = turn[inside]
         tri = np.ascontiguousarray(np.where(flip[:, None, None], c[:, ::-1], c))
         towards = np.where(flip[own], -ahead, ahead)
-        to = start.copy()
-        with np.errstate(over="ignore", invalid="ignore"):
-            to[rows, axis] = np.where(towards > 0, hi[axis] + reach, lo[axis] - reach)
-        # an end not beyond every face (the mesh far from the origin) touches one: such rays tell nothing
-        beyond = np.where(towards > 0, to[rows, axis] > hi[axis], to[rows, axis] < lo[axis]) & np.isfinite(to).all(axis=1)
-        count, stopped = ray_crossings(tri, weight, start, to, axis.astype(np.int64), own.astype(np.int64), grid.origin,
-                                       float(grid.cube), grid.dims.astype(np.int64), grid.start, grid.size, grid.key,
-                                       grid.box, SHELL_WORK[0] * len(tri) + SHELL_WORK[1], True)
-        told = ~stopped & beyond
+        count, told = axis_rays(tri, weight, start, axis, towards, own, grid, SHELL_WORK[0] * len(tri) + SHELL_WORK[1],
+                                True)
         fine = (count == 0) | (count == -1)
         n = len(names)
         seen = np.bincount(which[told], minlength=n) > 0
