@@ -176,7 +176,7 @@ def test_a_nifti_mask_is_read_with_its_header_scaling_said_where_it_moves_0(tmp_
     path.write_bytes(bytes(header))
     values = np.asanyarray(nib.load(path).dataobj)
     r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--json"], capture_output=True, text=True)
-    said = [line for line in r.stderr.splitlines() if "scl_inter" in line]
+    said = [line for line in r.stderr.splitlines() if "scl_inter" in line and "warning:" in line]
     if inter == 0 or not slope or np.isnan(slope):  # no scaling of the stored 0: nothing to say
         assert r.returncode == 0 and not said, r.stderr
         assert json.loads(r.stdout)["voxels"] == np.count_nonzero(values) == 18
@@ -185,6 +185,8 @@ def test_a_nifti_mask_is_read_with_its_header_scaling_said_where_it_moves_0(tmp_
     assert f"scl_inter {inter:g} (value = " in said[0] and f"reads a stored 0 as {inter:g}:" in said[0], r.stderr
     if np.unique(values).tolist() == [1.0, 2.0]:  # two values beside no 0: no mask
         assert r.returncode == 2 and "not a binary volume" in r.stderr
+        # the refusal names the scaling its values were read through, beside the warning
+        assert any("error:" in line and f"scl_inter {inter:g}" in line for line in r.stderr.splitlines()), r.stderr
     else:
         assert r.returncode == 0, r.stderr
         assert json.loads(r.stdout)["voxels"] == np.count_nonzero(values) == mask.size - 18
@@ -213,6 +215,25 @@ def test_nifti_labels_made_fractions_by_scl_slope_are_refused_naming_it(tmp_path
     assert r.returncode == 0, r.stderr
     scaled = np.asanyarray(nib.load(tmp_path / "seg2.0.nii").dataobj)
     assert [row["label"] for row in json.loads(r.stdout)["labels"]] == [2, 6] == sorted(np.unique(scaled)[1:].tolist())
+
+
+def test_a_nifti_mask_made_fractions_by_scl_slope_is_refused_naming_it(tmp_path, capsys):
+    """A volume stored 0, 1 and 2 under scl_slope 0.5 reads (as nibabel
+    reads it) 0, 0.5 and 1: refused as "not a binary volume ... e.g. 0.5"
+    with no word of the header, as if the file stored 0.5. The refusal
+    names scl_slope and its value, as the label reader's does."""
+    volume = np.zeros((4, 4, 4), np.uint8)
+    volume[1, 1, 1], volume[2, 2, 2] = 1, 2
+    img = nib.Nifti1Image(volume, np.eye(4))
+    img.header.set_slope_inter(0.5, 0)
+    nib.save(img, tmp_path / "f.nii")
+    assert sorted(np.unique(np.asanyarray(nib.load(tmp_path / "f.nii").dataobj)).tolist()) == [0, 0.5, 1]
+    with pytest.raises(isoflow.IsoflowError) as caught:
+        isoflow.read_object(tmp_path / "f.nii")
+    assert "e.g. 0.5" in str(caught.value) and "scl_slope 0.5 and scl_inter 0" in str(caught.value), caught.value
+    assert main(["info", str(tmp_path / "f.nii")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "not a binary volume" in err and "scl_slope 0.5 and scl_inter 0" in err, err
 
 
 @pytest.mark.parametrize("qform_code", [1, 0])

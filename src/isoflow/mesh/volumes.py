@@ -377,8 +377,8 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
             vol = binary(arr, where)
         except NotBinary as exc:
             # a label table takes 2D and 3D images: --labels is no way out in 4D
-            raise with_label_options(fill_value_named(exc, raw.fill, arr.dtype), every=arr.ndim != 4,
-                                     ndim=arr.ndim) from None
+            raise with_label_options(scaling_named(fill_value_named(exc, raw.fill, arr.dtype), raw.scaling),
+                                     every=arr.ndim != 4, ndim=arr.ndim) from None
     never_written(where, raw.unwritten, label)
     # a format stored (z, y, x) comes back turned, in Fortran order: the
     # kernels run about five times faster on C order than on that view
@@ -394,6 +394,42 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
         return DigitalObject(handed_over(vol), **{k: v for k, v in meta.items() if v is not None})
     except IsoflowError as exc:
         raise exc.at(where) from None
+
+
+def scaling_named(exc: NotBinary, scaling: str | None) -> NotBinary:
+    """``exc``, the refusal of a volume whose values were read through its
+    header's scaling (``scaling``: :attr:`RawVolume.scaling`), saying so
+    after its example value, as :func:`read_labels` says it: the value
+    refused ("e.g. 0.5") is not what the file stores (1, under a
+    ``scl_slope`` of 0.5), and the value alone would not say why.
+
+    Parameters
+    ----------
+    exc : NotBinary
+        The refusal (:func:`~isoflow.scale.arrays.binary`).
+    scaling : str or None
+        The scaling in words; None where the values are as stored.
+
+    Returns
+    -------
+    NotBinary
+        ``exc``, with the scaling named where there is one.
+
+    Examples
+    --------
+    >>> e = NotBinary("s.nii: not a binary volume (1 voxel holds values other than 0 and 1, e.g. 0.5); threshold it")
+    >>> str(scaling_named(e, "its header's scl_slope 0.5"))
+    "s.nii: not a binary volume (1 voxel holds values other than 0 and 1, e.g. 0.5; the values are read through \
+its header's scl_slope 0.5, not as stored); threshold it"
+    """
+    if scaling is None:
+        return exc
+    # the example's closing parenthesis: the last "); " (the file's name, which comes first, may hold one too)
+    head, sep, tail = exc.bare.rpartition("); ")
+    if not sep:
+        return exc
+    bare = f"{head}; the values are read through {scaling}, not as stored{sep}{tail}"
+    return NotBinary(str(exc.args[0]).replace(exc.bare, bare, 1), bare, exc.every, exc.ndim, exc.kind, exc.value)
 
 
 def said_of(raw: RawVolume, label: object = None) -> None:
