@@ -1,6 +1,7 @@
 """Bad arguments to the Python API: one IsoflowError naming the parameter
 and its value, never NumPy's own error nor a file written as given."""
 
+import inspect
 import os
 import re
 import shutil
@@ -81,14 +82,14 @@ def test_a_mapping_given_for_an_array_is_named_with_its_article():
     # "volume: a OrderedDict, not an array": the type's name behind the article it is said with
     import collections
 
-    with pytest.raises(IsoflowError, match=r"^volume: an OrderedDict, not an array$"):
+    with pytest.raises(IsoflowError, match=r"^analyze: obj: an OrderedDict, not an array$"):
         isoflow.analyze(collections.OrderedDict(volume=np.ones((2, 2, 2), bool)))
-    with pytest.raises(IsoflowError, match=r"^volume: a dict, not an array$"):
+    with pytest.raises(IsoflowError, match=r"^analyze: obj: a dict, not an array$"):
         isoflow.analyze({"volume": np.ones((2, 2, 2), bool)})
 
 @pytest.mark.parametrize("call,where", [
-    (lambda image, p: isoflow.analyze(image), "volume"),
-    (lambda image, p: isoflow.boundary_mesh(image), "boundary_mesh"),
+    (lambda image, p: isoflow.analyze(image), "analyze: obj"),
+    (lambda image, p: isoflow.boundary_mesh(image), "boundary_mesh: volume"),
     (lambda image, p: isoflow.run_flow(image), "run_flow: obj"),
     (lambda image, p: isoflow.DigitalObject(image), "DigitalObject volume"),
     (lambda image, p: isoflow.write_surface(image, p / "s.ply"), "write_surface: obj"),
@@ -115,7 +116,8 @@ def test_a_path_where_an_array_is_taken_is_named(tmp_path, function):
     np.save(tmp_path / "v.npy", np.ones((2, 2, 2), bool))
     for path in (str(tmp_path / "v.npy"), tmp_path / "v.npy"):
         reader = "read_labels" if function is isoflow.label_table else "read_object"  # a label image's reader
-        with pytest.raises(IsoflowError, match=rf"v\.npy: a path, not an array; read it with isoflow\.{reader}"):
+        with pytest.raises(IsoflowError, match=rf"^{function.__name__}: (obj: |volume: )?\S*v\.npy is a path, not an "
+                                               rf"array; read it with isoflow\.{reader}"):
             function(path)
 
 
@@ -142,12 +144,12 @@ RAGGED = [[[1, 0], [1]], [[1, 1], [0, 1]]]  # a 2x2x2 volume with one voxel left
 
 
 @pytest.mark.parametrize(("call", "where"), [
-    (lambda: isoflow.euler_characteristic(RAGGED), "volume"),
-    (lambda: isoflow.betti_numbers(RAGGED), "volume"),
-    (lambda: isoflow.analyze(RAGGED), "volume"),
-    (lambda: isoflow.closed_surfaces(RAGGED), "volume"),
-    (lambda: isoflow.boundary_mesh(RAGGED), "volume"),
-    (lambda: isoflow.configuration_histogram(RAGGED), "volume"),
+    (lambda: isoflow.euler_characteristic(RAGGED), "euler_characteristic: volume"),
+    (lambda: isoflow.betti_numbers(RAGGED), "betti_numbers: volume"),
+    (lambda: isoflow.analyze(RAGGED), "analyze: obj"),
+    (lambda: isoflow.closed_surfaces(RAGGED), "closed_surfaces: volume"),
+    (lambda: isoflow.boundary_mesh(RAGGED), "boundary_mesh: volume"),
+    (lambda: isoflow.configuration_histogram(RAGGED), "configuration_histogram: volume"),
     (lambda: isoflow.flow_step(RAGGED), "flow_step: obj"),
     (lambda: isoflow.run_flow(RAGGED), "run_flow: obj"),
     (lambda: isoflow.to_manifold(RAGGED), "to_manifold: obj"),
@@ -211,8 +213,10 @@ def _refused_as_masked(call, where, count):
 
 
 @pytest.mark.parametrize(("function", "where"), [
-    *[(f, "volume") for f in (isoflow.analyze, isoflow.euler_characteristic, isoflow.betti_numbers, isoflow.configurations,
-                              isoflow.configuration_histogram, isoflow.closed_surfaces, isoflow.boundary_mesh)],
+    (isoflow.analyze, "analyze: obj"),
+    *[(f, f"{f.__name__}: volume") for f in (isoflow.euler_characteristic, isoflow.betti_numbers, isoflow.configurations,
+                                             isoflow.configuration_histogram, isoflow.closed_surfaces,
+                                             isoflow.boundary_mesh)],
     (isoflow.DigitalObject, "DigitalObject volume"),
     *[(f, f"{f.__name__}: obj") for f in (isoflow.flow_step, isoflow.run_flow, isoflow.to_manifold)],
 ])
@@ -880,7 +884,7 @@ def test_read_labels_gives_label_table_the_files_units(tmp_path):
     assert table["volume"].tolist() == [12 * float(np.prod(zooms)), 20 * float(np.prod(zooms))]
     # a pitch given replaces the file's
     assert isoflow.label_table(image, pitch=1.0)["volume"].tolist() == [12.0, 20.0]
-    with pytest.raises(IsoflowError, match="seg.nii.gz: a path, not an array; read it with isoflow.read_labels"):
+    with pytest.raises(IsoflowError, match="seg.nii.gz is a path, not an array; read it with isoflow.read_labels"):
         isoflow.label_table(str(tmp_path / "seg.nii.gz"))
 
 def test_a_trimesh_scene_is_read_as_its_file_is(tmp_path):
@@ -1618,7 +1622,7 @@ def test_a_result_given_for_an_array_is_named_with_the_field_that_holds_one(call
 
 @pytest.mark.parametrize(("given", "words"), [
     (lambda v: isoflow.DigitalObject(v, pitch=0.5), ("a DigitalObject", ".volume", "write_volume")),
-    (lambda v: "labels.npy", ("labels.npy: a path", "isoflow.read_labels")),
+    (lambda v: "labels.npy", ("labels.npy is a path", "isoflow.read_labels")),
     (lambda v: pytest.importorskip("trimesh").creation.box(), ("a mesh (Trimesh)", "voxelize")),
     (lambda v: isoflow.to_manifold(v), ("manifold3d.Manifold",)),
 ], ids=["DigitalObject", "path", "Trimesh", "Manifold"])
@@ -2012,7 +2016,50 @@ REFUSALS = [
     ("to_manifold", lambda tmp: isoflow.to_manifold(LABELS_2D), " needs a 3D object, got 2D"),
     ("boundary_mesh", lambda tmp: isoflow.boundary_mesh(LABELS_2D), " needs a 3D volume, got a 2D array"),
     ("closed_surfaces", lambda tmp: isoflow.closed_surfaces(np.ones((2, 2), bool)), " needs a 3D volume, got a 2D array"),
+    ("write_surface", lambda tmp: isoflow.write_surface(LABELS_2D, tmp / "s.ply"), " needs a 3D object, got 2D"),
 ]
+
+#: every public function that takes a volume (its first argument, ``obj`` or
+#: ``volume``), called on ``v``; a writer writes into ``tmp``
+VOLUME_TAKERS = {
+    "analyze": lambda v, tmp: isoflow.analyze(v),
+    "euler_characteristic": lambda v, tmp: isoflow.euler_characteristic(v),
+    "betti_numbers": lambda v, tmp: isoflow.betti_numbers(v),
+    "closed_surfaces": lambda v, tmp: isoflow.closed_surfaces(v),
+    "configurations": lambda v, tmp: isoflow.configurations(v),
+    "configuration_histogram": lambda v, tmp: isoflow.configuration_histogram(v),
+    "boundary_mesh": lambda v, tmp: isoflow.boundary_mesh(v),
+    "run_flow": lambda v, tmp: isoflow.run_flow(v, 1),
+    "flow_step": lambda v, tmp: isoflow.flow_step(v),
+    "to_manifold": lambda v, tmp: isoflow.to_manifold(v),
+    "write_surface": lambda v, tmp: isoflow.write_surface(v, tmp / "s.ply"),
+    "write_volume": lambda v, tmp: isoflow.write_volume(v, tmp / "v.npy"),
+}
+
+
+def test_every_public_function_that_takes_a_volume_is_checked_below():
+    takers = {name for name in isoflow.__all__ if inspect.isfunction(getattr(isoflow, name))
+              and next(iter(inspect.signature(getattr(isoflow, name)).parameters), None) in ("obj", "volume")}
+    assert takers == set(VOLUME_TAKERS)
+
+
+@pytest.mark.parametrize("given", ["labels", "path", "nan"])
+@pytest.mark.parametrize("name", sorted(VOLUME_TAKERS))
+def test_a_bad_volume_is_refused_naming_the_function_called(name, given, tmp_path):
+    """analyze, euler_characteristic and the others that take an array
+    refused a label image as "volume: not a binary volume ...", naming the
+    argument and not the function, where run_flow said "run_flow: obj:
+    ..."; analyze("x.npy") said "x.npy: a path, not an array". Each
+    refusal begins with the function called, then its argument."""
+    if name == "to_manifold":
+        pytest.importorskip("manifold3d")
+    volume = {"labels": np.arange(8).reshape(2, 2, 2), "path": "x.npy", "nan": np.full((2, 2, 2), np.nan)}[given]
+    argument = next(iter(inspect.signature(getattr(isoflow, name)).parameters))
+    with pytest.raises(IsoflowError) as caught:
+        VOLUME_TAKERS[name](volume, tmp_path)
+    message = str(caught.value)
+    assert message.startswith(f"{name}: {argument}: ") and "\n" not in message, message
+    assert not any(tmp_path.iterdir())
 
 
 def _cube_manifold():

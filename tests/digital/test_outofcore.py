@@ -828,7 +828,7 @@ def test_a_dask_or_zarr_array_beyond_memory_is_refused_by_the_in_memory_function
     z[...] = v
     for array in (da.from_array(v, chunks=(7, 7, 7)), z):
         monkeypatch.setattr(memory, "default_budget", lambda: v.nbytes // 2)
-        for call, where in ((analyze, "volume"), (isoflow.label_table, "label_table image")):
+        for call, where in ((analyze, "analyze: obj"), (isoflow.label_table, "label_table image")):
             with pytest.raises(IsoflowError, match=f"^{where}: reading a 20x20x20 (dask|zarr) array of uint8 into "
                                                    "memory needs about .*; isoflow.analyze_chunked reads") as exc:
                 call(array, 6)

@@ -561,7 +561,7 @@ def test_a_path_or_an_object_given_for_the_array_says_what_to_pass(tmp_path):
     vol = np.zeros((4, 4, 4), bool)
     vol[1:3, 1:3, 1:3] = True
     zarr.open_array(tmp_path / "v.zarr", mode="w", shape=vol.shape, dtype=bool)[:] = vol
-    with pytest.raises(IsoflowError, match=r"v\.zarr: a path, not an array; read it with zarr\.open_array"):
+    with pytest.raises(IsoflowError, match=r"v\.zarr is a path, not an array; read it with zarr\.open_array"):
         write_surface_blocks(str(tmp_path / "v.zarr"), tmp_path / "a.ply", scheduler="sync")
     with pytest.raises(IsoflowError, match=r"a DigitalObject, not an array; pass its \.volume \(and frame=obj"):
         write_surface_blocks(DigitalObject(vol), tmp_path / "b.ply", scheduler="sync")

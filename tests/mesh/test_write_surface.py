@@ -128,7 +128,7 @@ def test_an_existing_file_is_refused_without_force(tmp_path):
      "s.obj: ascii=True applies to .ply output only"),
     (lambda p: isoflow.write_surface(np.ones((2, 2, 2), bool), p / "s.txt"), "s.txt: surface must end in .ply"),
     (lambda p: isoflow.write_surface(np.ones((2, 2), bool), p / "s.ply"),
-     "s.ply: a surface is written of a 3D object, this one is 2D"),
+     "write_surface needs a 3D object, got 2D"),
     (lambda p: isoflow.write_surface(np.zeros((2, 2, 2), bool), p / "s.ply"), "s.ply: the object is empty"),
     (lambda p: isoflow.write_surface(np.ones((2, 2, 2), bool), p / "s.ply", 8), "connectivity"),
     (lambda p: isoflow.write_surface(np.ones((2, 2, 2), bool), p / "s.ply", 26,

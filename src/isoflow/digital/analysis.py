@@ -190,7 +190,7 @@ def _analyze(obj, connectivity, surfaces: bool, method: Method, given: Place) ->
     else:
         # a bool array's bytes are made 0/1 only for the NumPy passes: the
         # compiled pass reads any nonzero byte as set
-        vol, parity = arrays.as_volume(obj, canonical=False, dims=DIMENSIONS)[1], 0
+        vol, parity = arrays.as_volume(obj, "analyze: obj", canonical=False, dims=DIMENSIONS)[1], 0
     spacing, corner, unit = placed(obj, vol.ndim, given)
     conn = resolve_connectivity(vol.ndim, connectivity)
     compiled = use_census(vol, surfaces, method, record=True)

@@ -187,8 +187,8 @@ def closed_surfaces(volume: ArrayLike, connectivity: int | np.integer | None = 6
     # may hold bytes other than 0/1, which the configurations and cc3d would
     # read as values); other values refused as analyze refuses them (a
     # conversion to bool first read 2 or NaN as True)
-    refuse_object(volume, "closed_surfaces")
-    vol = binary(volume)
+    refuse_object(volume, "closed_surfaces: volume")
+    vol = binary(volume, "closed_surfaces: volume")
     if vol.ndim != 3:
         raise IsoflowError(f"closed_surfaces needs a 3D volume, got a {vol.ndim}D array")
     connectivity = resolve_connectivity(3, connectivity)  # as an int

@@ -193,8 +193,8 @@ def configurations(volume: ArrayLike) -> np.ndarray:
     >>> c.shape, sorted(int(v) for v in c.ravel())
     ((2, 2, 2), [1, 2, 4, 8, 16, 32, 64, 128])
     """
-    with arrays.one_label_at_a_time("configurations({})"):  # a label table holds no configurations
-        xp, v = arrays.as_volume(volume, dims=DIMENSIONS)
+    # a label table holds no configurations
+    xp, v = arrays.as_volume(volume, "configurations: volume", dims=DIMENSIONS, remedy="configurations({})")
     # 8 octant bits up to 3D, 16 in 4D
     dtype = xp.uint8 if v.ndim <= 3 else xp.uint16
     # The one layer of background padding, written with the standard's
@@ -317,8 +317,9 @@ def configuration_histogram(volume: ArrayLike, slab: int | np.integer | None = N
         if whole is None or whole < 1:
             raise IsoflowError(f"slab must be an integer >= 1, got {given_text(slab)}")
         slab = whole
-    with arrays.one_label_at_a_time("configuration_histogram({})"):  # a label table holds no histogram
-        xp, v = arrays.as_volume(volume, dims=DIMENSIONS)
+    # a label table holds no histogram
+    xp, v = arrays.as_volume(volume, "configuration_histogram: volume", dims=DIMENSIONS,
+                             remedy="configuration_histogram({})")
     size = 1 << (1 << v.ndim)
     if v.size == 0:
         # no voxel: no padded copy of a volume that may be empty along one

@@ -29,14 +29,14 @@ from collections.abc import Iterator, Sequence
 from contextvars import ContextVar
 from dataclasses import dataclass, field, replace
 from numbers import Real
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError, counted, given_text, number_text, whole_given
 from ..results import read_only, same_fields, writeable_under
-from ..scale.arrays import as_array, binary, is_masked_array, one_label_at_a_time, read_anew
+from ..scale.arrays import as_array, binary, is_masked_array, read_anew
 from .frames import space_given
 from .units import unit_given
 
@@ -143,12 +143,11 @@ class DigitalObject:
                      unit: str | None = None, space: str | None = None) -> None: ...
 
     def __post_init__(self):
-        function, where = _CALLED.get()
+        function, where, remedy, remedy_dims = _CALLED.get()
         # a dask array is computed into memory made for this object, held
         # without the copy that memory numpy.asarray gives would need
         anew = read_anew(self.volume, where)
-        with one_label_at_a_time("DigitalObject({})"):
-            vol = binary(self.volume if anew is None else anew, where)
+        vol = binary(self.volume if anew is None else anew, where, remedy=remedy, remedy_dims=remedy_dims)
         if vol.ndim not in (2, 3, 4):
             raise IsoflowError(f"{where}: a digital object is 2D, 3D or 4D, got a {vol.ndim}D array")
         object.__setattr__(self, "volume", read_only(vol) if anew is not None else _held(vol, self.volume))
@@ -188,7 +187,8 @@ class DigitalObject:
 
     # ------------------------------------------------------------ builders
     @classmethod
-    def of(cls, x: DigitalObject | ArrayLike, function: str | None = None, argument: str = "obj") -> DigitalObject:
+    def of(cls, x: DigitalObject | ArrayLike, function: str | None = None, argument: str = "obj",
+           remedy: str | None = None, remedy_dims: tuple[int, ...] = (2, 3)) -> DigitalObject:
         """``x`` itself if it is a DigitalObject, else the object of the
         binary array ``x`` at the origin: the API takes either.
 
@@ -197,11 +197,19 @@ class DigitalObject:
         x : DigitalObject or array_like of bool
             An object, or a 0/1 array.
         function : str, optional
-            The function called, which a refusal of ``x`` names with its
-            ``argument`` (``run_flow: obj``); None: as the constructor
-            names it (``DigitalObject volume``).
+            The function called, which a refusal of ``x`` begins with,
+            then its ``argument`` (``run_flow: obj``); None: as the
+            constructor names it (``DigitalObject volume``).
         argument : str
             The argument ``x`` was given for.
+        remedy : str, optional
+            What the refusal of a label image offers, the call of one
+            label's mask, ``{}`` where it goes (``"write_surface({},
+            path)"``); None: ``function`` of the mask alone
+            (:func:`~isoflow.scale.arrays.binary`).
+        remedy_dims : tuple of int
+            The dimensions of a label image offered ``remedy``: those
+            ``function`` takes.
 
         Returns
         -------
@@ -222,12 +230,18 @@ class DigitalObject:
         Traceback (most recent call last):
         ...
         isoflow.errors.IsoflowError: run_flow: obj: a digital object is 2D, 3D or 4D, got a 1D array
+        >>> DigitalObject.of(np.arange(8).reshape(2, 2, 2), "flow_step")  # doctest: +ELLIPSIS
+        Traceback (most recent call last):
+        ...
+        isoflow.scale.arrays.NotBinary: flow_step: obj: not a binary volume (...); threshold it first, e.g. volume > 0, \
+or one label at a time, e.g. flow_step(volume == 2)
         """
         if isinstance(x, DigitalObject):
             return x
         if function is None:
             return cls(x)
-        with _called(function, f"{function}: {argument}"):
+        remedy = f"{function}({{}})" if remedy is None else remedy
+        with _called(_Caller(function, f"{function}: {argument}", remedy, remedy_dims)):
             return cls(x)
 
     @classmethod
@@ -338,7 +352,7 @@ class DigitalObject:
             # integer than 2, 3, 4 is refused by the constructor, as the array of a file would be
             raise IsoflowError(f"placement: ndim must be 2, 3 or 4, got {given_text(ndim)}")
         given: dict[str, Any] = {"pitch": pitch, "origin": origin, "offset": offset, "parity": parity}
-        with _called(function, "DigitalObject volume"):
+        with _called(_CONSTRUCTOR._replace(function=function)):
             return cls(np.zeros((1,) * whole, bool), **{k: v for k, v in given.items() if v is not None})
 
     # ------------------------------------------------------------ geometry
@@ -526,17 +540,32 @@ class DigitalObject:
         )
 
 
-#: the function a DigitalObject made now refuses its fields as (None: no
-#: function, where a reader puts its file before them), and its volume's
-#: name: the constructor's, or the argument of the function called
-_CALLED: ContextVar[tuple[str | None, str]] = ContextVar("called", default=("DigitalObject", "DigitalObject volume"))
+class _Caller(NamedTuple):
+    """Who a DigitalObject made now is made for, as its refusals say it:
+    the function called (None: no function, where a reader puts its file
+    before them), its volume's name (the constructor's, or the function's
+    and its argument's), and what a label image is offered
+    (:func:`~isoflow.scale.arrays.binary`'s ``remedy`` and
+    ``remedy_dims``)."""
+
+    function: str | None
+    volume: str
+    remedy: str
+    remedy_dims: tuple[int, ...]
+
+
+#: the constructor called by itself
+_CONSTRUCTOR = _Caller("DigitalObject", "DigitalObject volume", "DigitalObject({})", (2, 3))
+#: whom a DigitalObject made now is made for: the one mechanism that names
+#: the function called in a refusal of its volume (DigitalObject.of)
+_CALLED: ContextVar[_Caller] = ContextVar("called", default=_CONSTRUCTOR)
 
 
 @contextlib.contextmanager
-def _called(function: str | None, volume: str) -> Iterator[None]:
-    """Within it, a DigitalObject made refuses its fields naming
-    ``function`` and its volume naming ``volume``."""
-    token = _CALLED.set((function, volume))
+def _called(caller: _Caller) -> Iterator[None]:
+    """Within it, a DigitalObject made refuses its fields and its volume
+    as ``caller`` says."""
+    token = _CALLED.set(caller)
     try:
         yield
     finally:

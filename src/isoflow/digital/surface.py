@@ -37,7 +37,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from ..results import fields_repr, same_fields
-from ..scale.arrays import as_array, binary, index_dtype, one_label_at_a_time, refuse_object
+from ..scale.arrays import as_array, binary, index_dtype, refuse_object
 from ..scale.compiled import Method, use_compiled
 from .configurations import configurations, octant_bit
 from .connectivity import check_connectivity, resolve_connectivity
@@ -637,9 +637,9 @@ def boundary_mesh(volume: ArrayLike, connectivity: int | np.integer | None = 6, 
     >>> len(mesh.vertices), len(mesh.faces), mesh.euler_characteristic
     (8, 6, 2)
     """
-    refuse_object(volume, "boundary_mesh", then="the mesh is in array-corner units: obj.world(mesh.vertices) "
+    refuse_object(volume, "boundary_mesh: volume", then="the mesh is in array-corner units: obj.world(mesh.vertices) "
                   "puts its vertices where the object is")
-    vol = as_array(volume)
+    vol = as_array(volume, "boundary_mesh: volume")
     if vol.ndim != 3:  # an IsoflowError is the ValueError documented, as one line
         raise IsoflowError(f"boundary_mesh needs a 3D volume, got a {vol.ndim}D array")
     connectivity = resolve_connectivity(3, connectivity)  # as an int
@@ -647,8 +647,8 @@ def boundary_mesh(volume: ArrayLike, connectivity: int | np.integer | None = 6, 
     # 2, 255 and NaN are refused as analyze refuses them, not meshed as
     # object; the bit rows read any nonzero byte of a bool array as set, so
     # only the NumPy faces need its bytes made 0/1
-    with one_label_at_a_time("boundary_mesh({})", dims=(3,)):  # a label table is no mesh
-        vol = binary(vol, canonical=how == "numpy")
+    # a label table is no mesh
+    vol = binary(vol, "boundary_mesh: volume", canonical=how == "numpy", remedy="boundary_mesh({})", remedy_dims=(3,))
     if vol.size == 0:
         return _empty_mesh(connectivity)  # no voxel: no padded copy of the long axes
     if how == "compiled":

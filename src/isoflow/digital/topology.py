@@ -69,7 +69,7 @@ def euler_characteristic(volume: ArrayLike, connectivity: int | np.integer | Non
     >>> euler_characteristic(box, 6), euler_characteristic(box, 26)
     (2, 2)
     """
-    xp, v = arrays.as_volume(volume, dims=DIMENSIONS)
+    xp, v = arrays.as_volume(volume, "euler_characteristic: volume", dims=DIMENSIONS)
     conn = resolve_connectivity(v.ndim, connectivity)
     return euler_from_histogram(configuration_histogram(v), v.ndim, conn)
 
@@ -238,7 +238,7 @@ def betti_numbers(volume: ArrayLike, connectivity: int | np.integer | None = Non
     [3]
     """
     # 1D as euler_characteristic takes it (docs/ndim.md: the same functions serve 1D to 4D)
-    xp, v = arrays.as_volume(volume, dims=DIMENSIONS)
+    xp, v = arrays.as_volume(volume, "betti_numbers: volume", dims=DIMENSIONS)
     conn = resolve_connectivity(v.ndim, connectivity)
     method = _chosen(v, method)  # one choice for the histogram and the labellings
     # b1 = b0 + b2 - chi is a count only for an integer chi

@@ -79,7 +79,6 @@ from ..digital.indices import (
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, whole_given
 from ..results import read_only
-from ..scale.arrays import one_label_at_a_time
 from .planar import planar_moves
 from .segments import segment_moves
 
@@ -210,8 +209,7 @@ def flow_step(obj: DigitalObject | ArrayLike, connectivity: int | np.integer | N
     >>> flow_step(ell).volume.astype(int).tolist() == flow_step(ell, 4).volume.astype(int).tolist() == [[1, 1], [1, 0]]
     True
     """
-    with one_label_at_a_time("flow_step({})"):  # a label table is no flow
-        obj = DigitalObject.of(obj, "flow_step")
+    obj = DigitalObject.of(obj, "flow_step")  # a label image is offered flow_step of one label: a table is no flow
     if obj.volume.size == 0:
         # no voxel, so no vertex that stays: the empty object on the other
         # lattice, without the configurations of a volume long along its other axes

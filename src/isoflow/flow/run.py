@@ -41,7 +41,6 @@ from ..digital.lattice import DigitalObject
 from ..digital.measures import unheld_dropped
 from ..errors import IsoflowError, check_callable, check_switch, given_text, whole_given
 from ..results import Result
-from ..scale.arrays import one_label_at_a_time
 from .engines import ArrayFlow, Method, flow_engine
 from .motion import flow_connectivity
 
@@ -412,8 +411,7 @@ def run_flow(
     >>> r.stop_reason, [s["voxels"] for s in r["steps"]]
     ('vanished', [27, 8, 1, 0])
     """
-    with one_label_at_a_time("run_flow({})"):  # a label table is no flow
-        obj = DigitalObject.of(obj, "run_flow")
+    obj = DigitalObject.of(obj, "run_flow")  # a label image is offered run_flow of one label: a table is no flow
     conn = flow_connectivity(obj.ndim, connectivity)
     check_callable(progress, "progress", "progress(step, state)")
     steps, max_steps = check_count("steps", steps), check_count("max_steps", max_steps)

@@ -18,7 +18,6 @@ from numpy.typing import ArrayLike
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..digital.surface import boundary_mesh
 from ..errors import IsoflowError, given_text
-from ..scale.arrays import one_label_at_a_time
 from .voxelize import say_note, voxelize
 
 if TYPE_CHECKING:
@@ -178,8 +177,7 @@ def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int | np.integer |
 
     # the dimension before the values: "threshold it" is no remedy for a 2D label image
     if getattr(obj, "ndim", 3) == 3:
-        with one_label_at_a_time("to_manifold({})", dims=(3,)):  # a label table is no solid
-            obj = DigitalObject.of(obj, "to_manifold")
+        obj = DigitalObject.of(obj, "to_manifold", remedy_dims=(3,))  # a label table is no solid
     if not isinstance(obj, DigitalObject) or obj.ndim != 3:
         raise IsoflowError(f"to_manifold needs a 3D object, got {getattr(obj, 'ndim', 0)}D")
     mesh = boundary_mesh(obj.volume, connectivity)

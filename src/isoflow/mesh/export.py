@@ -57,7 +57,6 @@ import numpy as np
 from ..digital.float64 import beyond_axes_reasons, lost_axes_reasons, placement_words
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, check_switch, given_text, warn
-from ..scale.arrays import one_label_at_a_time
 from .float32 import float32_effect, float64_corners, float64_moved
 from .outputs import atomic_write, check_output_path, output_set
 
@@ -1045,10 +1044,11 @@ def write_surface(
         raise IsoflowError(f"{path}: ascii=True applies to .ply output only")
     # the dimension before the values: "threshold it" is no remedy for a 2D label image
     if getattr(obj, "ndim", 3) == 3:
-        with one_label_at_a_time("write_surface({}, path)", dims=(3,)):  # a label table is no surface
-            obj = DigitalObject.of(obj, "write_surface")
+        # a label table is no surface
+        obj = DigitalObject.of(obj, "write_surface", remedy="write_surface({}, path)", remedy_dims=(3,))
     if not isinstance(obj, DigitalObject) or obj.ndim != 3:
-        raise IsoflowError(f"{path}: a surface is written of a 3D object, this one is {getattr(obj, 'ndim', 0)}D")
+        # named by the function, as to_manifold, boundary_mesh and closed_surfaces name theirs: the file is not at fault
+        raise IsoflowError(f"write_surface needs a 3D object, got {getattr(obj, 'ndim', 0)}D")
     if mesh is None:
         if obj.voxels == 0:
             raise IsoflowError(f"{path}: the object is empty, there is no surface to write")

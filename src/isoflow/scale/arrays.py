@@ -21,7 +21,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -62,7 +62,7 @@ def refuse_object(array, where: str, then: str = "", reader: str = "isoflow.read
     the result to place it as the object is placed; ``reader``: the
     function that reads such a file."""
     if isinstance(array, (str, os.PathLike)):
-        raise IsoflowError(f"{array}: a path, not an array; read it with {reader}")
+        raise IsoflowError(f"{where}: {array} is a path, not an array; read it with {reader}")
     if all(hasattr(array, name) for name in ("volume", "pitch", "origin", "parity")):
         raise IsoflowError(f"{where}: a DigitalObject, not an array; pass its .volume" + (f" ({then})" if then else ""))
     if all(hasattr(array, name) for name in ("array", "spacing", "origin")):  # a LabelImage (read_labels)
@@ -331,7 +331,8 @@ def refuse_masked(array: object, where: str = "volume") -> None:
         )
 
 
-def binary(array, where: str = "volume", near=None, canonical: bool = True) -> np.ndarray:
+def binary(array, where: str = "volume", near=None, canonical: bool = True, remedy: str | None = None,
+           remedy_dims: tuple[int, ...] = (2, 3)) -> np.ndarray:
     """A host boolean volume from a 0/1 array, or a clear error saying why not.
 
     Other values (NaN, 2, -1, 255) are refused rather than read as True: a
@@ -340,7 +341,27 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
     block (out-of-core input). ``canonical=False`` returns a bool array as it
     is, for a pass that reads every nonzero byte as set
     (:func:`isoflow.scale.bitrows.pack`), which spares it the pass over the
-    volume that the check costs."""
+    volume that the check costs.
+
+    ``where`` begins a refusal: a public function's name and its argument's
+    (``run_flow: obj``), a file's name, or the argument alone. A label image
+    in memory is offered :func:`~isoflow.digital.label_table.label_table`,
+    which stands in for analyze and its kind only; ``remedy`` (the function
+    called, ``{}`` where one label's mask goes: ``"run_flow({})"``,
+    ``"write_surface({}, path)"``) offers instead that call of one label's
+    mask, as a table of numbers is no flow, no surface and no histogram; an
+    image of a dimension not in ``remedy_dims`` (those the function takes)
+    is offered neither, as its next refusal would be of that.
+
+    Examples
+    --------
+    >>> image = np.array([[0, 1], [2, 2]], np.uint8)
+    >>> binary(image, "flow_step: obj", remedy="flow_step({})")
+    Traceback (most recent call last):
+    ...
+    isoflow.scale.arrays.NotBinary: flow_step: obj: not a binary image (2 pixels hold values other than 0 and 1, \
+e.g. 2); threshold it first, e.g. image > 0, or one label at a time, e.g. flow_step(image == 2)
+    """
     refuse_object(array, where)
     arr = as_array(array, where)
     if arr.dtype == np.bool_ and not canonical:
@@ -382,12 +403,27 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
         # it is that value (a whole array of one value is read as its mask by the file readers, never refused)
         one = (near is not None and bool(np.isfinite(value)) and bool(np.all(values == value))
                and not bool((arr == 1).any()))
-        # the test that selects one label, for the remedy a function other than analyze's kind offers
-        mask = f"{thing} == {value}" if table else None
-        raise NotBinary(bare + (f", or give every label its row with isoflow.label_table({thing})" if table else ""),
-                        bare, every=every, ndim=arr.ndim if table else None, kind=kind, value=value if one else None,
-                        mask=mask)
+        raise NotBinary(bare + (label_remedy(thing, value, remedy, remedy_dims, arr.ndim) if table else ""),
+                        bare, every=every, ndim=arr.ndim if table else None, kind=kind, value=value if one else None)
     return arr.astype(bool)
+
+
+def label_remedy(thing: str, label: object, remedy: str | None, dims: tuple[int, ...], ndim: int) -> str:
+    """What a refusal of a label image in memory, where a mask is
+    expected, offers after its threshold (:func:`binary`): every label's
+    row of a table, or ``remedy`` of one label's mask, or nothing for an
+    image of a dimension the function does not take.
+
+    Examples
+    --------
+    >>> label_remedy("volume", 2, None, (2, 3), 3)
+    ', or give every label its row with isoflow.label_table(volume)'
+    >>> label_remedy("volume", 2, "write_surface({}, path)", (3,), 3), label_remedy("image", 2, "to_manifold({})", (3,), 2)
+    (', or one label at a time, e.g. write_surface(volume == 2, path)', '')
+    """
+    if remedy is None:
+        return f", or give every label its row with isoflow.label_table({thing})"
+    return f", or one label at a time, e.g. {remedy.format(f'{thing} == {label}')}" if ndim in dims else ""
 
 
 #: more distinct values other than 0 and 1 than this read as a grey image
@@ -580,72 +616,26 @@ class NotBinary(IsoflowError):
     (:func:`value_kind`), so that a probability map is offered no label;
     ``value``: the one value other than 0 where the block read holds no
     other, a mask of it (0/255), which ``--label`` then names (``--label
-    255``), else None; ``mask``: where a label image in memory was given
-    (the refusal then offers :func:`~isoflow.digital.label_table.label_table`),
-    the test that selects one of its labels (``volume == 2``), which
-    :func:`one_label_at_a_time` offers instead to a function that no label
-    table stands in for, else None."""
+    255``), else None."""
 
     def __init__(self, message: str, bare: str | None = None, every: bool | None = True, ndim: int | None = None,
-                 kind: str = "labels", value: object = None, mask: str | None = None):
+                 kind: str = "labels", value: object = None):
         super().__init__(message)
         self.value = value
-        self.mask = mask
         self.bare = message if bare is None else bare
         self.every = every
         self.ndim = ndim
         self.kind = kind
 
 
-@contextlib.contextmanager
-def one_label_at_a_time(call: str, dims: tuple[int, ...] = (2, 3)) -> Iterator[None]:
-    """Within it, a label image refused where a mask is expected offers
-    ``call`` of one label's mask (``run_flow(volume == 2)``) where it
-    offered :func:`~isoflow.digital.label_table.label_table`, which stands
-    in for analyze and its kind only: a table of numbers is no flow, no
-    surface and no histogram. An image of a dimension the function does
-    not take is offered neither (its next refusal would be of that).
-
-    Parameters
-    ----------
-    call : str
-        The function called, ``{}`` where the mask goes:
-        ``"run_flow({})"``, ``"write_surface({}, path)"``.
-    dims : tuple of int
-        The dimensions it takes.
-
-    Yields
-    ------
-    None
-
-    Examples
-    --------
-    >>> image = np.array([[0, 1], [2, 2]], np.uint8)
-    >>> with one_label_at_a_time("flow_step({})"):
-    ...     binary(image)
-    Traceback (most recent call last):
-    ...
-    isoflow.scale.arrays.NotBinary: volume: not a binary image (2 pixels hold values other than 0 and 1, e.g. 2); \
-threshold it first, e.g. image > 0, or one label at a time, e.g. flow_step(image == 2)
-    """
-    try:
-        yield
-    except NotBinary as exc:
-        if exc.mask is None:
-            raise
-        if exc.ndim not in dims:
-            raise NotBinary(exc.bare, exc.bare, every=exc.every, ndim=exc.ndim, kind=exc.kind, value=exc.value) from None
-        raise NotBinary(f"{exc.bare}, or one label at a time, e.g. {call.format(exc.mask)}", exc.bare, every=exc.every,
-                        ndim=exc.ndim, kind=exc.kind, value=exc.value, mask=exc.mask) from None
-
-
-def as_volume(volume, where: str = "volume", canonical: bool = True, dims: tuple[int, ...] = (2, 3, 4)):
+def as_volume(volume, where: str = "volume", canonical: bool = True, dims: tuple[int, ...] = (2, 3, 4),
+              remedy: str | None = None):
     """``(xp, boolean volume)`` of a 0/1 array of a dimension in ``dims``:
-    host data checked by :func:`binary` (``canonical``: see there), device
-    arrays left where they are."""
+    host data checked by :func:`binary` (``canonical``, ``where`` and
+    ``remedy``: see there), device arrays left where they are."""
     xp = namespace(volume)
     if is_host(xp):
-        v = binary(volume, where, canonical=canonical)
+        v = binary(volume, where, canonical=canonical, remedy=remedy, remedy_dims=dims)
     else:
         v = volume
         if v.dtype != xp.bool:
