@@ -97,7 +97,7 @@ def test_whole_floats_for_counts_sizes_and_labels():
     (lambda v: isoflow.run_flow(np.ones((3, 3, 3), bool), steps=v), "steps must be an integer >= 0, got {}"),
     (lambda v: isoflow.analyze(np.ones((3, 3, 3), bool), threads=v), "threads must be a positive integer, got {}"),
     (lambda v: isoflow.betti_numbers(_tunnel(), chi=v), "chi must be an integer, got {}"),
-    (lambda v: isoflow.label_table(np.ones((3, 3, 3), np.uint8), labels=[v]), "label {} is not an integer"),
+    (lambda v: isoflow.label_table(np.ones((3, 3, 3), np.uint8), labels=[v]), "label_table: labels: label {} is not an integer"),
     (lambda v: isoflow.euler_lut(v), "ndim must be an integer 1..4, got {}"),
 ])
 @pytest.mark.parametrize(("given", "shown"), [(2.5, "2.5"), (True, "True"), (float("nan"), "nan"), ("2", "'2'")])

@@ -310,7 +310,7 @@ def test_an_array_of_names_gives_plain_strings(tmp_path, image):
 @pytest.mark.parametrize("names", [np.array("liver"), np.array([["liver"]])])
 def test_an_array_of_names_that_is_not_one_row_is_refused_naming_them(image, names):
     # a 0D array raised NumPy's TypeError "iteration over a 0-d array", naming no argument
-    with pytest.raises(IsoflowError, match=r"^label_table: names are a mapping of label to name or a sequence"):
+    with pytest.raises(IsoflowError, match=r"^label_table: names: names are a mapping of label to name or a sequence"):
         isoflow.label_table(image, names=names)
 
 

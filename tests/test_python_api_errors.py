@@ -116,7 +116,7 @@ def test_a_path_where_an_array_is_taken_is_named(tmp_path, function):
     np.save(tmp_path / "v.npy", np.ones((2, 2, 2), bool))
     for path in (str(tmp_path / "v.npy"), tmp_path / "v.npy"):
         reader = "read_labels" if function is isoflow.label_table else "read_object"  # a label image's reader
-        with pytest.raises(IsoflowError, match=rf"^{function.__name__}: (obj: |volume: )?\S*v\.npy is a path, not an "
+        with pytest.raises(IsoflowError, match=rf"^{function.__name__}: (obj: |volume: |image: )\S*v\.npy is a path, not an "
                                                rf"array; read it with isoflow\.{reader}"):
             function(path)
 
@@ -153,7 +153,7 @@ RAGGED = [[[1, 0], [1]], [[1, 1], [0, 1]]]  # a 2x2x2 volume with one voxel left
     (lambda: isoflow.flow_step(RAGGED), "flow_step: obj"),
     (lambda: isoflow.run_flow(RAGGED), "run_flow: obj"),
     (lambda: isoflow.to_manifold(RAGGED), "to_manifold: obj"),
-    (lambda: isoflow.label_table(RAGGED), "label_table image"),
+    (lambda: isoflow.label_table(RAGGED), "label_table: image"),
     (lambda: isoflow.class_histogram([list(range(255)), [1]]), "config_hist"),
     (lambda: isoflow.planar_index([[1, 0], [1]]), "points"),
     (lambda: isoflow.DigitalObject.from_points([[0, 0, 0], [1, 0]]), "lattice point coordinates"),
@@ -165,8 +165,8 @@ def test_nested_lists_of_uneven_lengths_are_refused_naming_the_argument(call, wh
         call()
 
 
-def test_write_labels_of_nested_lists_of_uneven_lengths_names_the_file(tmp_path):
-    with pytest.raises(IsoflowError, match=r"l\.npz: labels: nested sequences of uneven lengths are no array"):
+def test_write_labels_of_nested_lists_of_uneven_lengths_names_the_argument(tmp_path):
+    with pytest.raises(IsoflowError, match=r"^write_labels: labels: nested sequences of uneven lengths are no array"):
         isoflow.write_labels(RAGGED, tmp_path / "l.npz")
     assert not (tmp_path / "l.npz").exists()
 
@@ -225,8 +225,8 @@ def test_a_masked_volume_with_masked_voxels_is_refused_naming_the_count(function
 
 
 @pytest.mark.parametrize(("call", "where", "count"), [
-    (lambda: isoflow.label_table(MASKED_LABELS), "label_table image", 25),
-    (lambda: isoflow.label_table(isoflow.LabelImage(MASKED_LABELS, np.ones(3), np.zeros(3))), "label_table image", 25),
+    (lambda: isoflow.label_table(MASKED_LABELS), "label_table: image", 25),
+    (lambda: isoflow.label_table(isoflow.LabelImage(MASKED_LABELS, np.ones(3), np.zeros(3))), "label_table: image", 25),
     (lambda: isoflow.planar_index(MASKED[:, :, 2]), "points", 2),
     (lambda: isoflow.class_histogram(_masked(np.ones(256, np.int64), 3)), "config_hist", 1),
     (lambda: isoflow.voxelize_mesh(*_masked_mesh("vertices"), resolution=4), "voxelize_mesh: vertices", 1),
@@ -237,8 +237,8 @@ def test_a_masked_array_with_masked_elements_is_refused_naming_the_count(call, w
     _refused_as_masked(call, where, count)
 
 
-def test_write_labels_of_a_masked_array_with_masked_elements_names_the_file(tmp_path):
-    with pytest.raises(IsoflowError, match=r"l\.npz: labels: a masked array with 25 masked elements"):
+def test_write_labels_of_a_masked_array_with_masked_elements_names_the_argument(tmp_path):
+    with pytest.raises(IsoflowError, match=r"^write_labels: labels: a masked array with 25 masked elements"):
         isoflow.write_labels(MASKED_LABELS, tmp_path / "l.npz")
     assert not (tmp_path / "l.npz").exists()
 
@@ -1097,7 +1097,8 @@ def test_label_table_of_a_label_image_neither_2d_nor_3d_names_its_dimension(arra
     # a LabelImage keeps the spacing as given where its array is no image: label_table read it
     # as an array (spacing.tolist()) and raised AttributeError
     image = isoflow.LabelImage(array, 1.0, (0.0, 0.0, 0.0))
-    with pytest.raises(IsoflowError, match=f"^a label table needs a 3D or 2D label image, got a {ndim}D array$"):
+    with pytest.raises(IsoflowError, match=f"^label_table: image: a label table needs a 3D or 2D label image, got a "
+                                           f"{ndim}D array$"):
         isoflow.label_table(image)
 
 
@@ -1571,7 +1572,7 @@ def test_label_table_of_scipy_s_labels_and_count_says_to_pass_the_labels():
     mask = np.zeros((6, 6, 6), bool)
     mask[1:3, 1:3, 1:3] = mask[4:6, 4:6, 4:6] = True
     labels, count = ndimage.label(mask)
-    with pytest.raises(IsoflowError, match=r"^label_table: a \(labels, count\) pair, as scipy\.ndimage\.label gives"):
+    with pytest.raises(IsoflowError, match=r"^label_table: image: a \(labels, count\) pair, as scipy\.ndimage\.label gives"):
         isoflow.label_table((labels, count))
     assert isoflow.label_table(labels)["label"].tolist() == list(range(1, count + 1))
 
@@ -2054,11 +2055,99 @@ def test_a_bad_volume_is_refused_naming_the_function_called(name, given, tmp_pat
     if name == "to_manifold":
         pytest.importorskip("manifold3d")
     volume = {"labels": np.arange(8).reshape(2, 2, 2), "path": "x.npy", "nan": np.full((2, 2, 2), np.nan)}[given]
+    _refused_as_called(name, lambda: VOLUME_TAKERS[name](volume, tmp_path), tmp_path)
+
+
+def _refused_as_called(name: str, call, folder: Path) -> None:
+    """``call()`` of the public function ``name`` is refused in one line
+    that begins with ``name``, then its first argument, writing nothing
+    into ``folder``."""
     argument = next(iter(inspect.signature(getattr(isoflow, name)).parameters))
     with pytest.raises(IsoflowError) as caught:
-        VOLUME_TAKERS[name](volume, tmp_path)
+        call()
     message = str(caught.value)
     assert message.startswith(f"{name}: {argument}: ") and "\n" not in message, message
+    assert not any(folder.iterdir())
+
+
+#: the public functions that take a label image, each called with one
+LABEL_TAKERS = {
+    "label_table": lambda image, tmp: isoflow.label_table(image),
+    "write_labels": lambda image, tmp: isoflow.write_labels(image, tmp / "labels.npz"),
+}
+
+#: images that hold no labels, or are no image
+BAD_LABEL_IMAGES = {
+    "half": np.full((2, 2, 2), 0.5),
+    "nan": np.full((2, 2, 2), np.nan),
+    "4D": np.zeros((2, 2, 2, 2), np.uint8),
+    "path": "x.npy",
+    "complex": np.zeros((2, 2, 2), complex),
+    "object": np.array([[[None, 1]]], object),
+    "negative": np.full((2, 2, 2), -1.0),
+}
+
+
+def test_every_public_function_that_takes_a_label_image_is_checked_below():
+    takers = {name for name in isoflow.__all__ if inspect.isfunction(getattr(isoflow, name))
+              and next(iter(inspect.signature(getattr(isoflow, name)).parameters), None) in ("image", "labels")}
+    assert takers == set(LABEL_TAKERS)
+
+
+@pytest.mark.parametrize("given", sorted(BAD_LABEL_IMAGES))
+@pytest.mark.parametrize("name", sorted(LABEL_TAKERS))
+def test_a_bad_label_image_is_refused_naming_the_function_called(name, given, tmp_path):
+    """label_table(np.full((2, 2, 2), 0.5)) said "voxel (0, 0, 0) holds
+    0.5: not a whole number, so not a label", naming no function; its 4D
+    image "a label table needs ...", a list "label_table image: ...", and
+    write_labels began with the output file's name. Each refusal begins
+    with the function called, then its argument."""
+    image = BAD_LABEL_IMAGES[given]
+    if name == "label_table" and given == "negative":  # a table takes negative labels; a file holds them from 0 on
+        assert isoflow.label_table(image)["label"].tolist() == [-1]
+        return
+    _refused_as_called(name, lambda: LABEL_TAKERS[name](image, tmp_path), tmp_path)
+
+
+@pytest.mark.parametrize(("kwargs", "words"), [
+    ({"labels": [1.5]}, "label_table: labels: label 1.5 is not an integer"),
+    ({"labels": [2, 2]}, "label_table: labels: labels asked twice: 2"),
+    ({"labels": [300]}, "label_table: labels: label 300 is not a value"),
+    ({"names": 5}, "label_table: names: names are a mapping"),
+])
+def test_label_table_names_the_argument_refused(kwargs, words):
+    with pytest.raises(IsoflowError, match=f"^{re.escape(words)}"):
+        isoflow.label_table(np.ones((2, 2, 2), np.uint8), **kwargs)
+
+
+@pytest.mark.parametrize(("kwargs", "words"), [
+    ({"names": 5}, "write_labels: names: names are a mapping"),
+    ({"names": {-1: "a"}}, "write_labels: names: a label name is given for -1"),
+    ({"unit": 5}, "write_labels: unit 5 is not a length unit"),
+])
+def test_write_labels_names_the_argument_refused(kwargs, words, tmp_path):
+    # each began with the output file's name, as if the file were at fault
+    with pytest.raises(IsoflowError, match=f"^{re.escape(words)}"):
+        isoflow.write_labels(np.ones((2, 2, 2), np.uint8), tmp_path / "l.npz", **kwargs)
+    assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("call", ["analyze_chunked", "write_surface_blocks"])
+def test_a_chunked_label_image_is_refused_naming_the_function_called(call, tmp_path):
+    """analyze_chunked(dask labels) said "dask array: not a binary volume
+    ...", write_surface_blocks "volume: ...": each begins with the function
+    called, then its argument; where= still names the input."""
+    da = pytest.importorskip("dask.array")
+    from isoflow.mesh.surface_blocks import write_surface_blocks
+
+    labels = np.zeros((4, 4, 4), np.uint8)
+    labels[1, 1, 1] = 2
+    run = {"analyze_chunked": lambda a, **k: isoflow.analyze_chunked(a, **k),
+           "write_surface_blocks": lambda a, **k: write_surface_blocks(a, tmp_path / "s.ply", **k)}[call]
+    with pytest.raises(IsoflowError, match=f"^{call}: array: not a binary volume"):
+        run(da.from_array(labels, chunks=2))
+    with pytest.raises(IsoflowError, match="^seg.zarr: not a binary volume"):
+        run(da.from_array(labels, chunks=2), where="seg.zarr")
     assert not any(tmp_path.iterdir())
 
 

@@ -789,7 +789,7 @@ def test_blocks_beyond_the_memory_budget_are_refused_up_front(tmp_path, monkeypa
         assert "\n" not in str(exc.value) and told == []
     assert analyze_zarr(path, 6, threads=2, scheduler="sync") == want  # one block at a time fits
     monkeypatch.setattr(memory, "default_budget", lambda: per_block // 2)
-    with pytest.raises(IsoflowError, match="^dask array: summing its blocks .*; rechunk it, or pass smaller blocks"):
+    with pytest.raises(IsoflowError, match="^analyze_chunked: array: summing its blocks .*; rechunk it, or pass smaller blocks"):
         analyze_chunked(da.from_array(v.astype(np.uint8), chunks=v.shape), 6, threads=2)
     monkeypatch.setattr(memory, "default_budget", lambda: 2 * per_block + held)
     got = analyze_zarr(path, 6, threads=2)
@@ -828,7 +828,7 @@ def test_a_dask_or_zarr_array_beyond_memory_is_refused_by_the_in_memory_function
     z[...] = v
     for array in (da.from_array(v, chunks=(7, 7, 7)), z):
         monkeypatch.setattr(memory, "default_budget", lambda: v.nbytes // 2)
-        for call, where in ((analyze, "analyze: obj"), (isoflow.label_table, "label_table image")):
+        for call, where in ((analyze, "analyze: obj"), (isoflow.label_table, "label_table: image")):
             with pytest.raises(IsoflowError, match=f"^{where}: reading a 20x20x20 (dask|zarr) array of uint8 into "
                                                    "memory needs about .*; isoflow.analyze_chunked reads") as exc:
                 call(array, 6)

@@ -75,7 +75,7 @@ def test_write_labels_refuses_a_float_that_is_no_label_naming_its_voxel(tmp_path
     path = tmp_path / "labels.nii.gz"
     with pytest.raises(IsoflowError) as info:
         isoflow.write_labels(image, path)
-    assert str(info.value) == f"{path}: {words}"
+    assert str(info.value) == f"write_labels: labels: {words}"
     assert not path.exists()
     if value >= 0 or np.isnan(value):  # (label_table takes negative labels; a file holds them from 0 on)
         with pytest.raises(IsoflowError, match=re.escape(words)):
@@ -89,7 +89,7 @@ def test_a_negative_integer_label_is_refused_naming_its_voxel(tmp_path, dtype):
     path = tmp_path / "labels.npz"
     with pytest.raises(IsoflowError) as info:
         isoflow.write_labels(image, path)
-    assert str(info.value) == f"{path}: a label image holds labels from 0 on, this one holds -7 at voxel (1, 3, 0)"
+    assert str(info.value) == "write_labels: labels: a label image holds labels from 0 on, this one holds -7 at voxel (1, 3, 0)"
     assert not path.exists()
 
 

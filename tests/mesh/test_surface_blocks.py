@@ -590,5 +590,6 @@ def test_a_zarr_array_given_in_python_is_named_by_its_path_not_zarr_s_url(tmp_pa
         for run, given in ((write_surface_blocks, ("s.ply",)), (analyze_chunked, ())):
             with pytest.raises(IsoflowError) as info:
                 run(opened, *given)
-            assert str(info.value).startswith(f"{name}: not a binary volume"), str(info.value)
+            # the function called and its argument first, as every refusal of the Python API
+            assert str(info.value).startswith(f"{run.__name__}: array ({name}): not a binary volume"), str(info.value)
     assert not Path("s.ply").exists()

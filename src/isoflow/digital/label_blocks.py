@@ -102,7 +102,7 @@ def label_table_blocks(
     >>> across["b2"].tolist(), across["bbox-2"].tolist() == t["bbox-2"].tolist()
     ([1], True)
     """
-    checked_image(np.zeros((1,) * len(array.shape), array.dtype))  # 3D, of labels
+    checked_image(np.zeros((1,) * len(array.shape), array.dtype), "label_table_blocks: array")  # 3D, of labels
     kind = label_dtype(array.dtype)
     conn = check_connectivity(3, connectivity)
     place = DigitalObject.placement(3, pitch=pitch, origin=origin)

@@ -273,8 +273,8 @@ def label_table(
         World position of voxel (0, 0, 0)'s lowest corner (default 0).
     labels : sequence of int, optional
         The labels to report, in this order (default: every nonzero label
-        present, in increasing order); integers, Python's or NumPy's (a
-        float, even 1.0, or a bool is refused). A label absent from the image gets
+        present, in increasing order); whole numbers, Python's or NumPy's
+        (a whole float, 2.0, is label 2; 1.5 or a bool is refused). A label absent from the image gets
         a row of zeros (NaN box and centroid), as ``analyze`` of an empty
         mask. Label 0 is the background, which the default leaves out;
         asked for, it gets its row as any label does, ``analyze(image ==
@@ -371,21 +371,21 @@ def label_table(
     """
     from ..scale.compiled import check_method, using
 
-    names = label_names(names, "label_table")
+    names = label_names(names, "label_table: names")
     if isinstance(image, LabelImage):  # the file's place and names, unless given
         # as arrays only where the image is 2D or 3D (LabelImage): of any other, checked_image names the array
         pitch = np.asarray(image.spacing).tolist() if pitch is None else pitch
         origin = np.asarray(image.origin).tolist() if origin is None else origin
         names = image.names if names is None else names
         image = image.array
-    vol = checked_image(image)
+    vol = checked_image(image, "label_table: image")
     conn = resolve_connectivity(vol.ndim, connectivity)
     surfaces = check_switch(surfaces, "surfaces", "label_table")
     # the pitch and origin checked as every object's are, as given (an
     # array of them would make a string's ValueError NumPy's, and a bool
     # among numbers a number)
     place = DigitalObject.placement(vol.ndim, pitch=pitch, origin=origin, function="label_table")
-    wanted = None if labels is None else wanted_labels(labels, vol.dtype)
+    wanted = None if labels is None else wanted_labels(labels, vol.dtype, "label_table: labels")
     if vol.ndim == 2:
         from .planar_labels import planar_table
 
@@ -398,24 +398,37 @@ def label_table(
                                      place.spacing, vol.shape), names)
 
 
-def checked_image(image) -> np.ndarray:
+def checked_image(image, where: str) -> np.ndarray:
     """The label image as an array of :func:`label_dtype` (see
-    :func:`as_labels`): 3D or 2D."""
-    refuse_object(image, "label_table", reader="isoflow.read_labels")
+    :func:`as_labels`): 3D or 2D; a refusal begins with ``where``, the
+    function called and its argument (``label_table: image``).
+
+    Examples
+    --------
+    >>> checked_image(np.full((2, 2, 2), 0.5), "label_table: image")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: label_table: image: voxel (0, 0, 0) holds 0.5: not a whole number, so not a label
+    """
+    refuse_object(image, where, reader="isoflow.read_labels")
     if isinstance(image, Report):  # a Mapping, which NumPy would make a 1D array of its keys
-        raise IsoflowError("label_table: a Report (isoflow.analyze's result), which describes one object, not a label "
+        raise IsoflowError(f"{where}: a Report (isoflow.analyze's result), which describes one object, not a label "
                            "image; label_table takes the label image itself (an integer array or isoflow.read_labels's "
                            "LabelImage)")
     if isinstance(image, tuple) and len(image) == 2 and isinstance(image[0], np.ndarray) \
             and isinstance(image[1], (int, np.integer)) and not isinstance(image[1], (bool, np.bool_)):
         # scipy.ndimage.label's answer, which as_array would call nested lists of uneven lengths
-        raise IsoflowError(f"label_table: a (labels, count) pair, as scipy.ndimage.label gives, of an array of shape "
+        raise IsoflowError(f"{where}: a (labels, count) pair, as scipy.ndimage.label gives, of an array of shape "
                            f"{image[0].shape} and the count {int(image[1])}; pass its labels: "
                            "labels, count = ndimage.label(mask); label_table(labels)")
-    vol = as_array(image, "label_table image")
-    if vol.ndim not in (2, 3):
-        raise IsoflowError(f"a label table needs a 3D or 2D label image, got a {vol.ndim}D array")
-    return as_labels(vol)
+    vol = as_array(image, where)
+    try:
+        if vol.ndim not in (2, 3):
+            raise IsoflowError(f"a label table needs a 3D or 2D label image, got a {vol.ndim}D array")
+        return as_labels(vol)
+    except IsoflowError as exc:
+        # the command line names the file before these words (a store's type, as info reads it block by block)
+        raise IsoflowError.worded(f"{where}: {exc}", str(exc)) from None
 
 
 def label_dtype(dtype) -> np.dtype:
@@ -592,14 +605,16 @@ def every_other_boxes(vol: np.ndarray) -> int:
     return int(np.prod(extent, axis=1)[values != 0].sum())
 
 
-def wanted_labels(labels, dtype) -> np.ndarray:
+def wanted_labels(labels, dtype, where: str | None = None) -> np.ndarray:
     """The labels asked for, as values of the image's type: each one a
     whole number (:func:`~isoflow.errors.whole_given`: not ``1.5`` or a
-    bool) the type holds, none twice."""
+    bool) the type holds, none twice; a refusal begins with ``where`` where
+    given (the function called and its argument: ``label_table: labels``)."""
     if isinstance(labels, Iterable) and not isinstance(labels, (str, bytes, np.ndarray)):
         # a generator, a set, dict keys: their labels in their order (NumPy holds such an object as one value)
         labels = list(labels)
     # a 0D array of an integer (np.load of a saved label) is that integer
+    head = "" if where is None else f"{where}: "
     asked: list[Any] = [scalar_given(value) for value in np.atleast_1d(np.asarray(labels, dtype=object)).ravel()]
     info = np.iinfo(label_dtype(dtype))
     values: list[int] = []
@@ -607,14 +622,15 @@ def wanted_labels(labels, dtype) -> np.ndarray:
         whole = whole_given(value)
         if whole is None:
             # True taken as label 1, or 1.5 as label 1, would hide a slip (a mask's values, a mean) behind a row
-            raise IsoflowError(f"label {given_text(value)} is not an integer: labels are asked for as whole numbers")
+            raise IsoflowError(f"{head}label {given_text(value)} is not an integer: labels are asked for as whole "
+                               "numbers")
         if not info.min <= whole <= info.max:
-            raise IsoflowError(f"label {given_text(value)} is not a value the labels of this image hold: they are "
+            raise IsoflowError(f"{head}label {given_text(value)} is not a value the labels of this image hold: they are "
                                f"{np.dtype(dtype)} ({info.min} to {info.max})")
         values.append(whole)
     if len(set(values)) != len(values):
         twice = sorted({v for v in values if values.count(v) > 1})
-        raise IsoflowError(f"labels asked twice: {', '.join(map(str, twice))}")
+        raise IsoflowError(f"{head}labels asked twice: {', '.join(map(str, twice))}")
     return np.array(values, dtype=dtype)
 
 

@@ -67,6 +67,7 @@ from ..scale.arrays import NotBinary, binary, fill_value_named
 from ..scale.chunks import (
     BlockTicks,
     SpatialAxes,
+    argument_words,
     block_bounds,
     checked_block_shape,
     decoded_chunk_voxels,
@@ -76,7 +77,6 @@ from ..scale.chunks import (
     layer_axes,
     never_written,
     smaller_blocks_help,
-    store_name,
     unwritten_fill,
     zarr_blocks,
     zarr_volume,
@@ -286,9 +286,10 @@ def _checked(array, where: str | os.PathLike | None) -> tuple[tuple[int, ...], s
     of the input in messages; one-line errors for anything else."""
     is_zarr = is_zarr_array(array)
     if not is_zarr and not isinstance(array, import_dask()[1].Array):
-        raise IsoflowError(f"analyze_chunked needs a dask or zarr array, got {type(array).__name__}; {_instead(array)}")
+        raise IsoflowError(f"analyze_chunked: array: a dask or zarr array is read block by block, not "
+                           f"{type(array).__name__}; {_instead(array)}")
     if where is None:
-        where = store_name(array, str(getattr(array, "path", None) or "zarr array")) if is_zarr else "dask array"
+        where = argument_words(array, "analyze_chunked")
     elif isinstance(where, os.PathLike):
         where = os.fsdecode(where)
     elif not isinstance(where, str):
@@ -729,7 +730,9 @@ def analyze_chunked(
         refused naming it.
     where : str or os.PathLike, optional
         The input's name in error messages (a path is taken as its text;
-        anything else is refused).
+        anything else is refused); default: the function and its
+        argument, ``analyze_chunked: array``, with a zarr store's name
+        (``analyze_chunked: array (seg.zarr)``).
     progress : callable, optional
         ``progress(done, total)``, called as each block is summed and
         merged (``total`` twice the blocks; on a ``dask.distributed``

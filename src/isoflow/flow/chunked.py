@@ -51,7 +51,15 @@ import numpy as np
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, check_callable, check_switch, counted
 from ..mesh.outputs import remove_entry
-from ..scale.chunks import compute, decoded_chunk_voxels, import_dask, import_zarr, never_written, unwritten_fill
+from ..scale.chunks import (
+    compute,
+    decoded_chunk_voxels,
+    import_dask,
+    import_zarr,
+    never_written,
+    store_name,
+    unwritten_fill,
+)
 from ..scale.memory import check_fits, default_budget, sized
 from .engines import ArrayFlow
 
@@ -475,8 +483,10 @@ class ChunkedFlow(ArrayFlow):
         out = {"step": step, "voxels": state.voxels, "parity": state.parity, "betti": [0, 0, 0],
                "euler_characteristic": 0, "energy": 0, "bbox": None}
         if state.voxels:
-            r = analyze_chunked(state.array(), self.conn, surfaces=False, scheduler=self.scheduler,
-                                threads=self.workers)
+            array = state.array()
+            # the step's store named as the file it is (not the function called: the flow's own file)
+            r = analyze_chunked(array, self.conn, surfaces=False, scheduler=self.scheduler, threads=self.workers,
+                                where=store_name(array, str(state.path)))
             box = state.place.world(np.zeros(3)).tolist() + state.place.world(np.array(state.shape, float)).tolist()
             out.update(betti=list(map(int, r["betti"])), euler_characteristic=int(r["euler_characteristic"]),
                        energy=int(r["energy"]), bbox=box)

@@ -49,7 +49,7 @@ from ..digital.surface import QuadMesh, row_tables, triangle_rows
 from ..errors import IsoflowError
 from ..scale.arrays import NotBinary, as_array, binary, fill_value_named, index_dtype, refuse_object
 from ..scale.chunkcache import ChunkReader
-from ..scale.chunks import BlockTicks, decoded_chunk_voxels, is_zarr_array, smaller_blocks_help, store_name
+from ..scale.chunks import BlockTicks, argument_words, decoded_chunk_voxels, is_zarr_array, smaller_blocks_help
 from ..scale.compiled import using
 from .export import (
     STL_DTYPE,
@@ -638,7 +638,9 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     force : bool
         Replace an existing output.
     where : str, optional
-        The input's name in messages.
+        The input's name in messages; default: the function and its
+        argument, ``write_surface_blocks: array``, with a zarr store's
+        name.
     comments : tuple of str
         PLY header comments; by default ``isoflow write_surface_blocks,
         N-connectivity`` and the per-vertex columns, as :func:`write_surface`
@@ -682,7 +684,7 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     from ..digital.connectivity import resolve_connectivity
     from ..scale.compiled import thread_count
 
-    where = where or store_name(array, "volume")
+    where = where or argument_words(array, "write_surface_blocks")
     out = _checked_output(path, force)
     # a path (the store's, as the command takes it), an object or a mesh: AttributeError 'str' object has no
     # attribute 'shape'

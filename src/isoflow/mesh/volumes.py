@@ -1463,8 +1463,8 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
     """
     path = check_path(path, "path", "write_labels",
                       hint="the labels come first: write_labels(labels, path)" if isinstance(labels, (str, os.PathLike)) else "")
-    unit = unit_given(unit, str(path))
-    names = label_names(names, str(path))
+    unit = unit_given(unit, "write_labels")
+    names = label_names(names, "write_labels: names")
     if isinstance(labels, LabelImage):  # its place and names, unless given, as label_table takes it
         pitch = labels.spacing if pitch is None else pitch
         origin = labels.origin if origin is None else origin
@@ -1478,21 +1478,22 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
         space = None
     pitch = 1.0 if pitch is None else pitch
     # an object, a mesh or a path: NumPy would make each a 0D array, refused for its shape, not named
-    refuse_object(labels, f"{path}: labels", reader="isoflow.read_labels",
+    where = "write_labels: labels"
+    refuse_object(labels, where, reader="isoflow.read_labels",
                   then="and its place, pitch=obj.spacing, origin=obj.origin; or write_volume(obj, path) writes it")
-    arr = as_array(labels, f"{path}: labels")
+    arr = as_array(labels, where)
     if arr.ndim == 4:
         # read_labels and label_table take 2D and 3D only: a file this wrote should read back
-        raise IsoflowError(f"{path}: a label image is written in 2D or 3D, as read_labels reads it back; this one "
+        raise IsoflowError(f"{where}: a label image is written in 2D or 3D, as read_labels reads it back; this one "
                            "is 4D (np.save keeps it, and read_volume(path, label=N) reads one label of it as 4D)")
     if arr.ndim not in (2, 3) or arr.dtype.kind not in "biuf":
-        raise IsoflowError(f"{path}: a label image is a 3D or 2D array of integers (or bools, or floats of whole "
+        raise IsoflowError(f"{where}: a label image is a 3D or 2D array of integers (or bools, or floats of whole "
                            f"numbers), got {arr.ndim}D {arr.dtype}")
-    arr = _unsigned_labels(arr, path)
+    arr = _unsigned_labels(arr, where)
     if names and min(names) < 0:
         # read_labels names a signed image's negative labels; a file written here holds none of them
-        raise IsoflowError(f"{path}: a label name is given for {min(names)}, and write_labels writes labels from 0 "
-                           "on (a negative label is refused)")
+        raise IsoflowError(f"write_labels: names: a label name is given for {min(names)}, and write_labels writes "
+                           "labels from 0 on (a negative label is refused)")
     # the pitch and origin checked as every object's are, before the file
     # is written: the format stores whatever it is given
     place = DigitalObject.placement(arr.ndim, pitch=pitch, origin=origin, function="write_labels")
@@ -1540,23 +1541,24 @@ def names_not_kept(path: str | os.PathLike, count: int) -> str:
             f"{counted(count, 'label')} are not written (.nrrd, .h5, .zarr and .npz keep them)")
 
 
-def _unsigned_labels(arr: np.ndarray, path: str | os.PathLike) -> np.ndarray:
+def _unsigned_labels(arr: np.ndarray, where: str) -> np.ndarray:
     """The labels of an image of integers, bools or floats as unsigned
     integers, as :func:`write_labels` writes them; a value that is no label
-    (negative, NaN, not whole) is refused naming its voxel."""
+    (negative, NaN, not whole) is refused naming its voxel after ``where``
+    (the function and its argument)."""
     labels = arr
     if arr.dtype.kind in "bf":
         try:  # as label_table takes them: a bool image as uint8 0 and 1, whole floats as int64
             labels = as_labels(arr)
         except IsoflowError as exc:
-            raise exc.at(path) from None
+            raise exc.at(where) from None
     if labels.dtype.kind == "i":
         # signed labels (an int16 or int32 NIfTI read back, scipy.ndimage.label's and scikit-image's
         # label's output): written as the unsigned type of their width, whose bits are the same for
         # labels from 0 on (a view, no copy)
         if labels.size and labels.min() < 0:
             at = np.unravel_index(int(np.argmin(labels)), labels.shape)
-            raise IsoflowError(f"{path}: a label image holds labels from 0 on, this one holds {arr[at].item()!r} at "
+            raise IsoflowError(f"{where}: a label image holds labels from 0 on, this one holds {arr[at].item()!r} at "
                                f"{'pixel' if arr.ndim == 2 else 'voxel'} ({', '.join(str(int(i)) for i in at)})")
         labels = labels.view(labels.dtype.str.replace("i", "u"))
     if arr.dtype.kind == "f":

@@ -269,6 +269,33 @@ def store_name(array: Any, default: str) -> str:
     return os.path.join(os.fsdecode(root), store_path.path) if store_path.path else os.fsdecode(root)
 
 
+def argument_words(array: Any, function: str, argument: str = "array") -> str:
+    """How a refusal of a chunked ``array`` given to ``function`` begins
+    where the caller names it not: the function, its argument, and the
+    store's name where the array has one (:func:`store_name`).
+
+    Parameters
+    ----------
+    array : object
+        A dask or zarr array (or anything else).
+    function : str
+        The function called.
+    argument : str
+        The argument ``array`` was given for.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> argument_words(object(), "analyze_chunked")
+    'analyze_chunked: array'
+    """
+    name = store_name(array, "")
+    return f"{function}: {argument}" + (f" ({name})" if name else "")
+
+
 def decoded_chunk_voxels(array: Any) -> int:
     """Voxels of the largest chunk that a read of any part of ``array``
     decodes whole: zarr decodes a whole chunk (an inner chunk of a shard)
