@@ -257,6 +257,22 @@ def test_surface_labels_of_a_zarr_store_in_its_units(tmp_path, capsys, segmentat
         assert abs(mesh.volume) == pytest.approx(row["volume"])
 
 
+def test_a_complex_store_s_fill_value_is_no_label(tmp_path, capsys):
+    """``info STORE --labels`` of a complex store whose fill value is 2+3j
+    warned that its chunks never written "count as label 2" (float() of
+    the fill value, with NumPy's ComplexWarning and its source line on
+    stderr) before refusing the store: a complex value is no label."""
+    zarr = pytest.importorskip("zarr")
+    path = tmp_path / "c.zarr"
+    zarr.create_array(str(path), shape=(4, 4, 4), chunks=(2, 2, 2), dtype="c16", fill_value=2 + 3j)
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        code, _, err = said(capsys, "info", path, "--labels")
+    err = [line for line in err if not line.startswith("isoflow info: note: ")]
+    assert code == 2 and err == [f"isoflow info: error: {path}: a label image holds integers, not complex128"], err
+    assert not [w for w in seen if issubclass(w.category, np.exceptions.ComplexWarning) or "label 2" in str(w.message)]
+
+
 def test_a_store_read_as_nan_where_never_written_is_refused_with_what_would_read_it(tmp_path, capsys):
     """A float store whose fill value is NaN reads its chunks never written
     as NaN: ``info`` refused it and offered --labels, which refuses NaN as

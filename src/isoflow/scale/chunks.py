@@ -986,12 +986,17 @@ def fill_label(array) -> int | None:
     (2, None)
     >>> fill_label(zarr.create_array({}, shape=(4,), dtype="u8", fill_value=2**64 - 3))
     18446744073709551613
+    >>> fill_label(zarr.create_array({}, shape=(4,), dtype="c16", fill_value=2 + 3j)) is None  # no label
+    True
     """
     fill = getattr(array, "fill_value", None)
     if isinstance(fill, (bool, int, np.bool_, np.integer)):
         # exact: a float holds whole numbers only up to 2**53, so a uint64 or
         # int64 fill value beyond would name a neighbouring label
         return int(fill)
+    if isinstance(fill, (complex, np.complexfloating)):
+        # a complex store holds no labels (it is refused as such); float() would read 2+3j as label 2
+        return None
     try:
         value = float(fill)
     except (TypeError, ValueError):
