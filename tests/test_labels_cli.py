@@ -1318,6 +1318,32 @@ def test_surface_labels_dir_flushes_the_set_at_once_not_file_by_file(tmp_path, c
     assert flushes == [(9, False), (12, False)]
 
 
+def test_surface_labels_reads_the_memory_available_once_not_per_file(tmp_path, capsys, monkeypatch):
+    # each label's mesh and each file's read-back checked its memory against a budget read anew from
+    # /proc/meminfo and the control groups: once a file, thousands of reads for a segmentation's labels
+    from isoflow.scale import memory
+
+    reads, real = [], memory.meminfo_available
+
+    def meminfo_available():
+        reads.append(1)
+        return real()
+
+    monkeypatch.setattr(memory, "meminfo_available", meminfo_available)
+    counts = []
+    for sizes in ([2, 3], [2, 3, 4, 2, 3, 4]):
+        np.save(tmp_path / "labels.npy", boxes(sizes))
+        out = tmp_path / f"out{len(sizes)}"
+        reads.clear()
+        run(capsys, "surface", tmp_path / "labels.npy", "--labels", "-o", f"{out}/", "--suffix", "ply")
+        counts.append(len(reads))
+        for label, size in enumerate(sizes, 1):  # the files as written, read back by trimesh
+            mesh = trimesh.load(out / f"label_{label}.ply", process=False)
+            assert mesh.is_watertight and mesh.volume == pytest.approx(size ** 3)
+    # the table's, then the surfaces': as many for six files as for two, fewer than the files
+    assert counts[0] == counts[1] <= 2, counts
+
+
 def test_surface_labels_checks_its_placement_once(tmp_path, capsys, monkeypatch):
     # the placement was checked before the table and again before the surfaces, the same numbers twice
     nrrd = pytest.importorskip("nrrd")

@@ -902,6 +902,18 @@ def label_directory(directory: Path) -> Iterator[None]:
 def surface_labels(args: argparse.Namespace, target) -> int:
     """:func:`cmd_surface_labels` once its outputs are checked (and
     ``-o DIR/`` made): the table, the meshes, the files."""
+    from ..scale.memory import budget_held
+
+    about, conn, table, image, _ = read_table(args)
+    # the memory available read once, with the image in memory, for every check that follows (each label's
+    # mesh, each file's read-back): not once a file, which costs a read of /proc and the control groups each
+    with budget_held():
+        return surfaces_of_table(args, target, about, conn, table, image)
+
+
+def surfaces_of_table(args: argparse.Namespace, target, about: dict, conn: int, table: dict, image) -> int:
+    """:func:`surface_labels` once the table is read: the meshes, the
+    files, the lines that say what was written."""
     from ..digital.label_meshes import label_batches
     from ..mesh.export import float32_transform_problem, float64_move_note
     from ..mesh.float32 import float64_moved
@@ -909,7 +921,6 @@ def surface_labels(args: argparse.Namespace, target) -> int:
     from .imports_ahead import import_ahead
     from .progress import TimeNote, progress_bar
 
-    about, conn, table, image, _ = read_table(args)
     check_surfaces_fit(args.input, table, image.spacing, args.labels == "all")
     corners = about["corners"]  # read_table checks the placement's corners before it counts the table
     names = [f"label_{v}" for v in table["label"].tolist()]

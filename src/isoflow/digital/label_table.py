@@ -45,7 +45,7 @@ from numpy.typing import ArrayLike
 from ..errors import IsoflowError, check_switch, given_text, scalar_given, warn, whole_given
 from ..results import fields_repr, same_fields
 from ..scale.arrays import FILL_READ, FILL_ZERO, as_array, fill_as, refuse_object
-from ..scale.memory import check_fits
+from ..scale.memory import budget_held, check_fits
 from .closed_surfaces import sweep_tables, use_census
 from .connectivity import check_connectivity, resolve_connectivity
 from .float64 import scaled_counts, scaled_faces, underflow_line, unheld_columns
@@ -1175,23 +1175,25 @@ def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bo
              "features": np.zeros((len(labels), 17), np.int64), "doubled": np.zeros(len(labels), np.int64),
              "b0": np.zeros(len(labels), np.int64), "b2": np.zeros(len(labels), np.int64)}
     surfs: list[tuple[int, int, int]] = []
-    for row, label in enumerate(labels):
-        at = np.searchsorted(values, label)
-        if at == len(values) or values[at] != label:
-            continue
-        where = np.stack(np.unravel_index(order[starts[at]:ends[at]], vol.shape), axis=1)
-        lo, hi = where.min(axis=0), where.max(axis=0)
-        box = np.pad(vol[tuple(slice(a, b + 1) for a, b in zip(lo, hi))] == label, 1)
-        # the pass is chosen once for the whole image (_use_compiled): the
-        # boxes do not add to the tally of "auto", which would load numba
-        # part way through this call
-        report = analyze(box, conn, surfaces=surfaces, method="compiled" if use_census(box, surfaces) else "numpy")
-        found["voxels"][row], found["sums"][row] = len(where), where.sum(axis=0)
-        found["lo"][row], found["hi"][row] = lo, hi
-        found["b0"][row], found["b2"][row] = report["betti"][0], report["betti"][2]
-        found["features"][row] = _report_features(report, box)
-        found["doubled"][row] = report.get("doubled_edges", 0)
-        surfs += [(row, s["euler_characteristic"], s["faces"]) for s in report.get("surfaces", ())]
+    # each box's analyze checks its memory: the memory available read once for them all
+    with budget_held():
+        for row, label in enumerate(labels):
+            at = np.searchsorted(values, label)
+            if at == len(values) or values[at] != label:
+                continue
+            where = np.stack(np.unravel_index(order[starts[at]:ends[at]], vol.shape), axis=1)
+            lo, hi = where.min(axis=0), where.max(axis=0)
+            box = np.pad(vol[tuple(slice(a, b + 1) for a, b in zip(lo, hi))] == label, 1)
+            # the pass is chosen once for the whole image (_use_compiled): the
+            # boxes do not add to the tally of "auto", which would load numba
+            # part way through this call
+            report = analyze(box, conn, surfaces=surfaces, method="compiled" if use_census(box, surfaces) else "numpy")
+            found["voxels"][row], found["sums"][row] = len(where), where.sum(axis=0)
+            found["lo"][row], found["hi"][row] = lo, hi
+            found["b0"][row], found["b2"][row] = report["betti"][0], report["betti"][2]
+            found["features"][row] = _report_features(report, box)
+            found["doubled"][row] = report.get("doubled_edges", 0)
+            surfs += [(row, s["euler_characteristic"], s["faces"]) for s in report.get("surfaces", ())]
     table = np.array(surfs, np.int64).reshape(-1, 3)
     found.update(surface_rows=table[:, 0], surface_chi=table[:, 1], surface_faces=table[:, 2])
     return found
