@@ -897,8 +897,9 @@ def test_info_labels_csv_dash_prints_the_table_alone(tmp_path, capsys, segmentat
 
 
 def test_info_labels_csv_writes_a_volume_past_float64_as_inf_and_an_unknown_box_empty(tmp_path, capsys):
-    """Voxels of 1e150: a volume of 8e450 is past float64 (inf, as the
-    terminal table prints it), an area of 24e300 is not. The CSV writes
+    """Voxels of 1e150: a volume of 8e450 is past float64 (inf; the
+    terminal table prints the figure, 8e+450 (beyond float64)), an area
+    of 24e300 is not. The CSV writes
     the infinity as csv writes it, ``inf``, which float() and pandas read
     back as inf, not empty, which they read as "unknown" (NaN); JSON has
     no infinity and writes null. A box past float64's reach stays empty."""
@@ -914,6 +915,35 @@ def test_info_labels_csv_writes_a_volume_past_float64_as_inf_and_an_unknown_box_
     write_labels(image, tmp_path / "far.npz", origin=(1.7e308, 0, 0))  # corners a voxel apart are one float64
     row, = csv.DictReader(run(capsys, "info", tmp_path / "far.npz", "--labels", "--csv", "-").splitlines())
     assert row["bbox-0"] == "" and float(row["bbox-1"]) == 1.0 and float(row["volume"]) == 8.0
+
+
+def test_info_labels_text_says_a_measure_past_float64_as_info_does(tmp_path, capsys):
+    """Voxels of 1e200: 27 of them hold 2.7e601, past float64. The table
+    printed ``inf`` in its volume and area columns, where ``info`` of the
+    one object prints the figure, said to be beyond float64; the JSON
+    stays valid for a strict parser (null), the CSV ``inf`` as csv writes it."""
+    from isoflow import write_labels
+
+    def refuse(name):  # Python's json takes Infinity and NaN, which no JSON holds: a strict reader refuses them
+        raise ValueError(f"{name} is no JSON")
+
+    image = np.zeros((5, 5, 5), np.uint8)
+    image[1:4, 1:4, 1:4] = 3
+    write_labels(image, tmp_path / "huge.npz", pitch=(1e200,) * 3)
+    one = run(capsys, "info", tmp_path / "huge.npz", "--label", "3")
+    table = run(capsys, "info", tmp_path / "huge.npz", "--labels")
+    row = table.splitlines()[2].split()
+    assert "inf" not in row and row[:2] == ["3", "27"]
+    assert "volume                 2.7e+601 (beyond float64)" in one  # 27 * 1e600
+    assert " ".join(row[2:8]) == "2.7e+601 (beyond float64) beyond float64's range"
+    labels = json.loads(run(capsys, "info", tmp_path / "huge.npz", "--labels", "--json"), parse_constant=refuse)
+    assert labels["labels"][0]["volume"] is None and labels["labels"][0]["surface_area"] is None
+    row = next(csv.DictReader(run(capsys, "info", tmp_path / "huge.npz", "--labels", "--csv", "-").splitlines()))
+    assert float(row["volume"]) == math.inf
+    # a 2D image's area of 9 pixels of 1e200 x 1e200: 9e400; its perimeter of 12 pixel edges is in float64
+    write_labels(image[2], tmp_path / "flat.npz", pitch=(1e200,) * 2)
+    row = run(capsys, "info", tmp_path / "flat.npz", "--labels").splitlines()[2]
+    assert row.split()[:7] == ["3", "9", "9e+400", "(beyond", "float64)", "1.2e+201", "1"]
 
 
 @pytest.mark.parametrize("odd", ["\n", "\t", "\x1b[31m"])

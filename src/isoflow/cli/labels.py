@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import IsoflowError, counted, line_text, path_text, terminal_text
-from .table_text import csv_rows, json_rows
+from .table_text import csv_rows, json_rows, measure_text
 
 #: rows the terminal shows before the summary
 SHOWN_ROWS = 20
@@ -703,9 +703,17 @@ def write_csv(path, table: dict, force: bool) -> None:
             fh.write(text)
 
 
-def _cell(value, width: int) -> str:
+#: the measures of a row that are its cells times the cell's size (volume, area in 2D): beyond float64,
+#: their figure is worked out from the cells, as info's report gives it
+CELL_MEASURES = ("volume", "area")
+
+
+def _cell(table: dict, column: str, row: int, width: int, spacing) -> str:
+    value = table[column][row]
     if isinstance(value, (float, np.floating)):
-        return f"{value:>{width}.6g}"
+        # a measure past float64 (voxels of 1e200) as info's report says it, never a bare inf
+        voxels = int(table["voxels"][row]) if column in CELL_MEASURES else None
+        return f"{measure_text(float(value), voxels, list(spacing), len(spacing)):>{width}}"
     return f"{value:>{width}}"
 
 
@@ -724,14 +732,15 @@ def format_table(name, about: dict, conn: int, table: dict) -> str:
     # every column as wide as its widest shown value (64-bit labels, a
     # billion voxels), so that the columns stay aligned
     rows = range(min(n, SHOWN_ROWS))
-    shown = tuple((h, c, max([w] + [len(_cell(table[c][r], 0)) + 1 for r in rows])) for h, c, w in shown)
+    step = about["spacing"]
+    shown = tuple((h, c, max([w] + [len(_cell(table, c, r, 0, step)) + 1 for r in rows])) for h, c, w in shown)
     head = "".join(f"{h:>{w}}" for h, _, w in shown)
     # the genera's cells padded to one width where a name follows them, so that the names line up
     cells = [f"  {table['surfaces'][r]} ({_genera(table['genera'][r])})" for r in rows] if surfaces else []
     wide = max([len("  surfaces (genera)")] + [len(c) for c in cells]) if "name" in table else 0
     lines.append(head + (f"{'  surfaces (genera)':<{wide}}" if surfaces else "") + ("  name" if "name" in table else ""))
     for r in rows:
-        row = "".join(_cell(table[c][r], w) for _, c, w in shown)
+        row = "".join(_cell(table, c, r, w, step) for _, c, w in shown)
         if surfaces:
             row += f"{cells[r]:<{wide}}"
         if "name" in table:
