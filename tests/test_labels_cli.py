@@ -1999,13 +1999,28 @@ def test_labels_of_a_channel_axis_of_one_entry(capsys, tmp_path):
             assert row["euler_characteristic"] == prop.euler_number
 
 
-def test_a_long_choice_of_labels_takes_the_background(capsys, tmp_path, rng):
+def test_a_long_choice_of_labels_takes_the_background(capsys, tmp_path, rng, monkeypatch):
     """A choice of more labels than the table is asked for label by label
     (a range of millions) that holds 0 gives the background's row, as a
     short one does, in a file and in a zarr store read block by block: its
     voxels are the image's zeros, its Euler number scikit-image's, and 0 is
-    not called absent."""
+    not called absent. The table is made in one pass over the image (it
+    was made twice: every label's, then the background's alone)."""
     from skimage.measure import euler_number
+
+    from isoflow.digital import label_blocks
+    from isoflow.digital import label_table as tables
+
+    passes = []
+
+    def counted(real):
+        def table(*args, **kwargs):
+            passes.append(real.__name__)
+            return real(*args, **kwargs)
+        return table
+
+    monkeypatch.setattr(tables, "label_table", counted(tables.label_table))
+    monkeypatch.setattr(label_blocks, "label_table_blocks", counted(label_blocks.label_table_blocks))
 
     image = rng.choice([0, 1, 2, 7], size=(12, 11, 10), p=[0.4, 0.2, 0.2, 0.2]).astype(np.uint32)
     np.save(tmp_path / "seg.npy", image)
@@ -2015,9 +2030,11 @@ def test_a_long_choice_of_labels_takes_the_background(capsys, tmp_path, rng):
     store[:] = image
     paths.append(tmp_path / "seg.zarr")
     background = image == 0
-    for path in paths:
+    for path, made_by in zip(paths, ["label_table", "label_table_blocks"]):
+        passes.clear()
         code, out, err = said(capsys, "info", path, "--labels", "0-200000", "--json", "--connectivity", "26")
         assert code == 0, err
+        assert passes == [made_by]
         report = json.loads(out)
         assert [row["label"] for row in report["labels"]] == [0, 1, 2, 7]
         assert 0 not in report["absent"] and len(report["absent"]) == 200001 - 4

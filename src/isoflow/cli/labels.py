@@ -297,9 +297,9 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     # a row of zeros per label asked would cost more than the image
     every = asked is not None and len(asked) > CHOICE_ROWS
 
-    def table_of(chosen):
+    def table_of(chosen, background=False):
         if image is None:
-            return table_of_store(args, conn, chosen, surfaces, given)
+            return table_of_store(args, conn, chosen, surfaces, given, background)
         # the labels' type, as label_table reads them: a bool image as uint8
         kind = label_dtype(image.array.dtype) if image.array.dtype == np.bool_ else image.array.dtype
         about = {"shape": image.array.shape, "dtype": kind, "spacing": image.spacing,
@@ -308,16 +308,14 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
         wanted = None if chosen is None else _by_type(args.input, chosen, image.array.dtype)[0]
         try:
             return about, label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
-                                      surfaces=surfaces, threads=getattr(args, "threads", None), names=names)
+                                      surfaces=surfaces, threads=getattr(args, "threads", None), names=names,
+                                      background=background)
         except IsoflowError as exc:  # work that would not fit: the line names the file, as a store's does
             raise exc.at(args.input) from None
 
-    about, table = table_of(None if every else asked)
-    if every and (asked == 0).any():
-        # the table of every label has no row of the background, which a choice of 0 asks for
-        zero = table_of(np.zeros(1, asked.dtype))[1]
-        if zero["voxels"][0] > 0:
-            table = {k: np.concatenate([v, zero[k]]) for k, v in table.items()}
+    # the table of every label has no row of the background, which a choice of 0 asks for: the same one pass
+    # gives it (a second pass for 0 alone read the whole image again)
+    about, table = table_of(None if every else asked, background=every and bool((asked == 0).any()))
     # a slice saved as (X, Y, 1) is a plate here: info's note gives the line that saves its 2D table's image
     say_plate(args, tuple(about["shape"]))
     # an image without voxels (shape 0x3x3) has no label, as an all-0 one has none: the same empty table, as
@@ -446,11 +444,13 @@ def is_store(path) -> bool:
     return split_dataset(path)[0].suffix.lower() == ".zarr"
 
 
-def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, given: dict[int, str] | None = None):
+def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, given: dict[int, str] | None = None,
+                   background: bool = False):
     """The table of a zarr store, one layer of blocks at a time (never the
     whole image in memory), with a progress bar; the image as read (its
     shape, type and placement, no array); ``given``, the names of
-    ``--names``, over the store's own."""
+    ``--names``, over the store's own; ``background``, with ``asked``
+    None, the row of label 0 too."""
     from ..digital.label_blocks import grouped_layers, label_table_blocks
     from ..digital.label_table import label_dtype, with_names
     from ..digital.lattice import DigitalObject
@@ -470,7 +470,7 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, g
             area = int(np.prod([slabs.shape[a] for a in slabs.axes[1:]], dtype=np.int64))
             table = label_table_blocks(slabs, conn, layers=grouped_layers(slabs.layers, area), axes=slabs.axes,
                                        pitch=place.spacing, origin=place.origin, labels=wanted, surfaces=surfaces,
-                                       progress=show)
+                                       progress=show, background=background)
         except IsoflowError as exc:  # a voxel that is no label, a slab that would not fit
             named = str(exc).startswith(f"{slabs.where}: ")  # (a damaged chunk's line names the store already)
             raise (exc if named else exc.at(args.input)) from None
