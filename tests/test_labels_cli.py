@@ -913,8 +913,9 @@ def test_info_labels_csv_dash_prints_the_table_alone(tmp_path, capsys, segmentat
 
 
 def test_info_labels_csv_writes_a_volume_past_float64_as_inf_and_an_unknown_box_empty(tmp_path, capsys):
-    """Voxels of 1e150: a volume of 8e450 is past float64 (inf, as the
-    terminal table prints it), an area of 24e300 is not. The CSV writes
+    """Voxels of 1e150: a volume of 8e450 is past float64 (inf; the
+    terminal table prints the figure, 8e+450 (beyond float64)), an area
+    of 24e300 is not. The CSV writes
     the infinity as csv writes it, ``inf``, which float() and pandas read
     back as inf, not empty, which they read as "unknown" (NaN); JSON has
     no infinity and writes null. A box past float64's reach stays empty."""
@@ -930,6 +931,35 @@ def test_info_labels_csv_writes_a_volume_past_float64_as_inf_and_an_unknown_box_
     write_labels(image, tmp_path / "far.npz", origin=(1.7e308, 0, 0))  # corners a voxel apart are one float64
     row, = csv.DictReader(run(capsys, "info", tmp_path / "far.npz", "--labels", "--csv", "-").splitlines())
     assert row["bbox-0"] == "" and float(row["bbox-1"]) == 1.0 and float(row["volume"]) == 8.0
+
+
+def test_info_labels_text_says_a_measure_past_float64_as_info_does(tmp_path, capsys):
+    """Voxels of 1e200: 27 of them hold 2.7e601, past float64. The table
+    printed ``inf`` in its volume and area columns, where ``info`` of the
+    one object prints the figure, said to be beyond float64; the JSON
+    stays valid for a strict parser (null), the CSV ``inf`` as csv writes it."""
+    from isoflow import write_labels
+
+    def refuse(name):  # Python's json takes Infinity and NaN, which no JSON holds: a strict reader refuses them
+        raise ValueError(f"{name} is no JSON")
+
+    image = np.zeros((5, 5, 5), np.uint8)
+    image[1:4, 1:4, 1:4] = 3
+    write_labels(image, tmp_path / "huge.npz", pitch=(1e200,) * 3)
+    one = run(capsys, "info", tmp_path / "huge.npz", "--label", "3")
+    table = run(capsys, "info", tmp_path / "huge.npz", "--labels")
+    row = table.splitlines()[2].split()
+    assert "inf" not in row and row[:2] == ["3", "27"]
+    assert "volume                 2.7e+601 (beyond float64)" in one  # 27 * 1e600
+    assert " ".join(row[2:8]) == "2.7e+601 (beyond float64) beyond float64's range"
+    labels = json.loads(run(capsys, "info", tmp_path / "huge.npz", "--labels", "--json"), parse_constant=refuse)
+    assert labels["labels"][0]["volume"] is None and labels["labels"][0]["surface_area"] is None
+    row = next(csv.DictReader(run(capsys, "info", tmp_path / "huge.npz", "--labels", "--csv", "-").splitlines()))
+    assert float(row["volume"]) == math.inf
+    # a 2D image's area of 9 pixels of 1e200 x 1e200: 9e400; its perimeter of 12 pixel edges is in float64
+    write_labels(image[2], tmp_path / "flat.npz", pitch=(1e200,) * 2)
+    row = run(capsys, "info", tmp_path / "flat.npz", "--labels").splitlines()[2]
+    assert row.split()[:7] == ["3", "9", "9e+400", "(beyond", "float64)", "1.2e+201", "1"]
 
 
 @pytest.mark.parametrize("odd", ["\n", "\t", "\x1b[31m"])
@@ -1332,6 +1362,32 @@ def test_surface_labels_dir_flushes_the_set_at_once_not_file_by_file(tmp_path, c
             assert mesh.is_watertight and mesh.volume == pytest.approx(size ** 3)
     assert counts[0] == counts[1] <= 2, counts  # the directory's, not one per file
     assert flushes == [(9, False), (12, False)]
+
+
+def test_surface_labels_reads_the_memory_available_once_not_per_file(tmp_path, capsys, monkeypatch):
+    # each label's mesh and each file's read-back checked its memory against a budget read anew from
+    # /proc/meminfo and the control groups: once a file, thousands of reads for a segmentation's labels
+    from isoflow.scale import memory
+
+    reads, real = [], memory.meminfo_available
+
+    def meminfo_available():
+        reads.append(1)
+        return real()
+
+    monkeypatch.setattr(memory, "meminfo_available", meminfo_available)
+    counts = []
+    for sizes in ([2, 3], [2, 3, 4, 2, 3, 4]):
+        np.save(tmp_path / "labels.npy", boxes(sizes))
+        out = tmp_path / f"out{len(sizes)}"
+        reads.clear()
+        run(capsys, "surface", tmp_path / "labels.npy", "--labels", "-o", f"{out}/", "--suffix", "ply")
+        counts.append(len(reads))
+        for label, size in enumerate(sizes, 1):  # the files as written, read back by trimesh
+            mesh = trimesh.load(out / f"label_{label}.ply", process=False)
+            assert mesh.is_watertight and mesh.volume == pytest.approx(size ** 3)
+    # the table's, then the surfaces': as many for six files as for two, fewer than the files
+    assert counts[0] == counts[1] <= 2, counts
 
 
 def test_surface_labels_checks_its_placement_once(tmp_path, capsys, monkeypatch):
@@ -1959,13 +2015,28 @@ def test_labels_of_a_channel_axis_of_one_entry(capsys, tmp_path):
             assert row["euler_characteristic"] == prop.euler_number
 
 
-def test_a_long_choice_of_labels_takes_the_background(capsys, tmp_path, rng):
+def test_a_long_choice_of_labels_takes_the_background(capsys, tmp_path, rng, monkeypatch):
     """A choice of more labels than the table is asked for label by label
     (a range of millions) that holds 0 gives the background's row, as a
     short one does, in a file and in a zarr store read block by block: its
     voxels are the image's zeros, its Euler number scikit-image's, and 0 is
-    not called absent."""
+    not called absent. The table is made in one pass over the image (it
+    was made twice: every label's, then the background's alone)."""
     from skimage.measure import euler_number
+
+    from isoflow.digital import label_blocks
+    from isoflow.digital import label_table as tables
+
+    passes = []
+
+    def counted(real):
+        def table(*args, **kwargs):
+            passes.append(real.__name__)
+            return real(*args, **kwargs)
+        return table
+
+    monkeypatch.setattr(tables, "label_table", counted(tables.label_table))
+    monkeypatch.setattr(label_blocks, "label_table_blocks", counted(label_blocks.label_table_blocks))
 
     image = rng.choice([0, 1, 2, 7], size=(12, 11, 10), p=[0.4, 0.2, 0.2, 0.2]).astype(np.uint32)
     np.save(tmp_path / "seg.npy", image)
@@ -1975,9 +2046,11 @@ def test_a_long_choice_of_labels_takes_the_background(capsys, tmp_path, rng):
     store[:] = image
     paths.append(tmp_path / "seg.zarr")
     background = image == 0
-    for path in paths:
+    for path, made_by in zip(paths, ["label_table", "label_table_blocks"]):
+        passes.clear()
         code, out, err = said(capsys, "info", path, "--labels", "0-200000", "--json", "--connectivity", "26")
         assert code == 0, err
+        assert passes == [made_by]
         report = json.loads(out)
         assert [row["label"] for row in report["labels"]] == [0, 1, 2, 7]
         assert 0 not in report["absent"] and len(report["absent"]) == 200001 - 4

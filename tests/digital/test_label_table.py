@@ -545,3 +545,32 @@ def test_the_graph_of_pieces_placed_on_threads_in_runs_of_pairs_equals_analyze(r
         image = nested(rng) if trial == 0 else rng.choice(5, size=tuple(rng.integers(3, 11, 3)),
                                                            p=[0.4, 0.15, 0.15, 0.15, 0.15]).astype(np.uint16)
         assert_rows_equal_analyze(image, conn, method="compiled", threads=2 + trial % 2)
+
+
+@pytest.mark.parametrize("how", ["numpy", "compiled", "blocks", "2d"])
+def test_background_adds_label_0s_row_to_every_labels_in_one_pass(rng, how):
+    # every label and the background from one pass (info --labels 0-100000): the rows of labels=[0, ...]
+    from skimage.measure import euler_number
+
+    from isoflow.digital.label_blocks import label_table_blocks
+
+    if how == "compiled" and not have_numba():
+        pytest.skip("numba not installed")
+    image = rng.choice([0, 2, 5, -3], size=(9, 8, 7) if how != "2d" else (15, 13)).astype(np.int16)
+    if how == "blocks":
+        table = label_table_blocks(image, layers=[4, 5], background=True)
+        asked = label_table_blocks(image, labels=[-3, 0, 2, 5])
+    else:
+        method = "auto" if how == "2d" else how
+        table = label_table(image, background=True, method=method)
+        asked = label_table(image, labels=[-3, 0, 2, 5], method=method)
+    assert table["label"].tolist() == [-3, 0, 2, 5]
+    for column in table:
+        np.testing.assert_array_equal(table[column], asked[column], err_msg=column)
+    zero = table["label"].tolist().index(0)
+    assert table["voxels"][zero] == np.count_nonzero(image == 0)
+    assert table["euler_characteristic"][zero] == euler_number(image == 0, connectivity=1)
+    # an image with no voxel of 0 has no background row; a choice of labels asks for 0 itself
+    assert 0 not in label_table(image + 10, background=True)["label"].tolist()
+    with pytest.raises(IsoflowError, match="with labels, ask for 0"):
+        label_table(image, labels=[2], background=True)

@@ -119,3 +119,38 @@ def test_api_refuses_what_is_not_a_binary_volume():
     # 0/1 in any numeric type is fine, and equals the bool result
     v = random_volume(np.random.default_rng(5), 7)
     assert euler_characteristic(v.astype(np.float32)) == euler_number(v, connectivity=1)
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.int16, np.float32])
+def test_the_0_1_check_holds_no_temporary_of_the_whole_volume(dtype):
+    import tracemalloc
+
+    from isoflow.scale.arrays import binary
+
+    # a 0/1 volume (a segmentation saved as uint8) is checked for other
+    # values before it is read as bool: beside the bool volume returned,
+    # the check itself must not hold arrays of the whole volume (three of
+    # them were 2x a uint8 volume's bytes)
+    volume = np.zeros((128, 128, 128), dtype)
+    volume[10:90, 20:100, 5:120] = 1
+    volume[3, ::2, 1::3] = 1
+    tracemalloc.start()  # numpy reports its buffers to tracemalloc
+    try:
+        tracemalloc.reset_peak()
+        out = binary(volume)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert out.dtype == np.bool_ and np.array_equal(out, volume == 1)
+    assert peak - out.nbytes < 0.3 * volume.nbytes
+    # values other than 0 and 1 anywhere (the last block too) are still refused
+    for value in (2, -1 if dtype != np.uint8 else 255, np.nan if dtype == np.float32 else 7):
+        bad = volume.copy()
+        bad[-1, -1, -1] = value
+        with pytest.raises(IsoflowError, match="values other than 0 and 1"):
+            binary(bad)
+    if dtype == np.float32:
+        half = volume.copy()
+        half[127, 0, 0] = 0.5
+        with pytest.raises(IsoflowError, match="values other than 0 and 1"):
+            binary(half)

@@ -28,6 +28,7 @@ from .inputs import (
 )
 from .labels import add_labels_option, refuse_names_without_labels
 from .progress import progress_bar
+from .table_text import measure_text
 
 
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
@@ -298,56 +299,6 @@ def finite_or_null(report: dict) -> dict:
         return [finite(y) for y in x] if isinstance(x, list) else x
 
     return {key: finite(value) for key, value in report.items()}
-
-
-def measure_text(value: float, voxels: int | None = None, step=None, dimension: int = 3) -> str:
-    """A measure as the report prints it: to 6 digits, or where float64
-    holds no such number (a volume of voxels of 1e200: inf) the figure
-    from exact decimal arithmetic where it is ``voxels`` voxels of sizes
-    ``step`` (as ``surface``'s read-back gives the volume), said to be
-    beyond float64; else the words alone, never a bare ``inf``.
-
-    Parameters
-    ----------
-    value : float
-        The measure, float64.
-    voxels : int, optional
-        The voxels whose sizes multiply to it (the volume, or the area in
-        2D); None for a measure of faces (the surface area).
-    step : float or sequence of float, optional
-        The voxel size, one for every axis or one per axis.
-    dimension : int
-        The number of axes.
-
-    Returns
-    -------
-    str
-        The text.
-
-    Examples
-    --------
-    >>> measure_text(8.0)
-    '8'
-    >>> measure_text(float("inf"), 27, [1e200, 1e200, 1e200])
-    '2.7e+601 (beyond float64)'
-    >>> measure_text(float("inf"))
-    "beyond float64's range"
-    """
-    from decimal import Decimal, localcontext
-
-    if math.isfinite(value):
-        return f"{value:.6g}"
-    if voxels is None or step is None:
-        return "beyond float64's range"
-    sizes = list(step) if hasattr(step, "__len__") else [step] * dimension
-    with localcontext() as ctx:
-        ctx.prec = 40
-        exact = Decimal(int(voxels))
-        for size in sizes[:dimension]:
-            exact *= Decimal(float(size))
-        ctx.prec = 6
-        exact = (+exact).normalize()
-    return f"{exact:g} (beyond float64)"
 
 
 def format_measures(r: Report, step=None) -> list[str]:

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import IsoflowError, counted, line_text, path_text, terminal_text
-from .table_text import csv_rows, json_rows
+from .table_text import csv_rows, json_rows, measure_text
 
 #: rows the terminal shows before the summary
 SHOWN_ROWS = 20
@@ -297,9 +297,9 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     # a row of zeros per label asked would cost more than the image
     every = asked is not None and len(asked) > CHOICE_ROWS
 
-    def table_of(chosen):
+    def table_of(chosen, background=False):
         if image is None:
-            return table_of_store(args, conn, chosen, surfaces, given)
+            return table_of_store(args, conn, chosen, surfaces, given, background)
         # the labels' type, as label_table reads them: a bool image as uint8
         kind = label_dtype(image.array.dtype) if image.array.dtype == np.bool_ else image.array.dtype
         about = {"shape": image.array.shape, "dtype": kind, "spacing": image.spacing,
@@ -308,16 +308,14 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
         wanted = None if chosen is None else _by_type(args.input, chosen, image.array.dtype)[0]
         try:
             return about, label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
-                                      surfaces=surfaces, threads=getattr(args, "threads", None), names=names)
+                                      surfaces=surfaces, threads=getattr(args, "threads", None), names=names,
+                                      background=background)
         except IsoflowError as exc:  # work that would not fit: the line names the file, as a store's does
             raise exc.at(args.input) from None
 
-    about, table = table_of(None if every else asked)
-    if every and (asked == 0).any():
-        # the table of every label has no row of the background, which a choice of 0 asks for
-        zero = table_of(np.zeros(1, asked.dtype))[1]
-        if zero["voxels"][0] > 0:
-            table = {k: np.concatenate([v, zero[k]]) for k, v in table.items()}
+    # the table of every label has no row of the background, which a choice of 0 asks for: the same one pass
+    # gives it (a second pass for 0 alone read the whole image again)
+    about, table = table_of(None if every else asked, background=every and bool((asked == 0).any()))
     # a slice saved as (X, Y, 1) is a plate here: info's note gives the line that saves its 2D table's image
     say_plate(args, tuple(about["shape"]))
     # an image without voxels (shape 0x3x3) has no label, as an all-0 one has none: the same empty table, as
@@ -446,11 +444,13 @@ def is_store(path) -> bool:
     return split_dataset(path)[0].suffix.lower() == ".zarr"
 
 
-def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, given: dict[int, str] | None = None):
+def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, given: dict[int, str] | None = None,
+                   background: bool = False):
     """The table of a zarr store, one layer of blocks at a time (never the
     whole image in memory), with a progress bar; the image as read (its
     shape, type and placement, no array); ``given``, the names of
-    ``--names``, over the store's own."""
+    ``--names``, over the store's own; ``background``, with ``asked``
+    None, the row of label 0 too."""
     from ..digital.label_blocks import grouped_layers, label_table_blocks
     from ..digital.label_table import label_dtype, with_names
     from ..digital.lattice import DigitalObject
@@ -470,7 +470,7 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, g
             area = int(np.prod([slabs.shape[a] for a in slabs.axes[1:]], dtype=np.int64))
             table = label_table_blocks(slabs, conn, layers=grouped_layers(slabs.layers, area), axes=slabs.axes,
                                        pitch=place.spacing, origin=place.origin, labels=wanted, surfaces=surfaces,
-                                       progress=show)
+                                       progress=show, background=background)
         except IsoflowError as exc:  # a voxel that is no label, a slab that would not fit
             named = str(exc).startswith(f"{slabs.where}: ")  # (a damaged chunk's line names the store already)
             raise (exc if named else exc.at(args.input)) from None
@@ -703,9 +703,17 @@ def write_csv(path, table: dict, force: bool) -> None:
             fh.write(text)
 
 
-def _cell(value, width: int) -> str:
+#: the measures of a row that are its cells times the cell's size (volume, area in 2D): beyond float64,
+#: their figure is worked out from the cells, as info's report gives it
+CELL_MEASURES = ("volume", "area")
+
+
+def _cell(table: dict, column: str, row: int, width: int, spacing) -> str:
+    value = table[column][row]
     if isinstance(value, (float, np.floating)):
-        return f"{value:>{width}.6g}"
+        # a measure past float64 (voxels of 1e200) as info's report says it, never a bare inf
+        voxels = int(table["voxels"][row]) if column in CELL_MEASURES else None
+        return f"{measure_text(float(value), voxels, list(spacing), len(spacing)):>{width}}"
     return f"{value:>{width}}"
 
 
@@ -724,14 +732,15 @@ def format_table(name, about: dict, conn: int, table: dict) -> str:
     # every column as wide as its widest shown value (64-bit labels, a
     # billion voxels), so that the columns stay aligned
     rows = range(min(n, SHOWN_ROWS))
-    shown = tuple((h, c, max([w] + [len(_cell(table[c][r], 0)) + 1 for r in rows])) for h, c, w in shown)
+    step = about["spacing"]
+    shown = tuple((h, c, max([w] + [len(_cell(table, c, r, 0, step)) + 1 for r in rows])) for h, c, w in shown)
     head = "".join(f"{h:>{w}}" for h, _, w in shown)
     # the genera's cells padded to one width where a name follows them, so that the names line up
     cells = [f"  {table['surfaces'][r]} ({_genera(table['genera'][r])})" for r in rows] if surfaces else []
     wide = max([len("  surfaces (genera)")] + [len(c) for c in cells]) if "name" in table else 0
     lines.append(head + (f"{'  surfaces (genera)':<{wide}}" if surfaces else "") + ("  name" if "name" in table else ""))
     for r in rows:
-        row = "".join(_cell(table[c][r], w) for _, c, w in shown)
+        row = "".join(_cell(table, c, r, w, step) for _, c, w in shown)
         if surfaces:
             row += f"{cells[r]:<{wide}}"
         if "name" in table:
@@ -902,6 +911,18 @@ def label_directory(directory: Path) -> Iterator[None]:
 def surface_labels(args: argparse.Namespace, target) -> int:
     """:func:`cmd_surface_labels` once its outputs are checked (and
     ``-o DIR/`` made): the table, the meshes, the files."""
+    from ..scale.memory import budget_held
+
+    about, conn, table, image, _ = read_table(args)
+    # the memory available read once, with the image in memory, for every check that follows (each label's
+    # mesh, each file's read-back): not once a file, which costs a read of /proc and the control groups each
+    with budget_held():
+        return surfaces_of_table(args, target, about, conn, table, image)
+
+
+def surfaces_of_table(args: argparse.Namespace, target, about: dict, conn: int, table: dict, image) -> int:
+    """:func:`surface_labels` once the table is read: the meshes, the
+    files, the lines that say what was written."""
     from ..digital.label_meshes import label_batches
     from ..mesh.export import float32_transform_problem, float64_move_note
     from ..mesh.float32 import float64_moved
@@ -909,7 +930,6 @@ def surface_labels(args: argparse.Namespace, target) -> int:
     from .imports_ahead import import_ahead
     from .progress import TimeNote, progress_bar
 
-    about, conn, table, image, _ = read_table(args)
     check_surfaces_fit(args.input, table, image.spacing, args.labels == "all")
     corners = about["corners"]  # read_table checks the placement's corners before it counts the table
     names = [f"label_{v}" for v in table["label"].tolist()]

@@ -19,6 +19,9 @@ the compiled passes' threads (the digits and the joins release the GIL),
 the next ones while one is written out, each thread's cells in buffers it
 keeps from one block to the next. A block's text is ASCII bytes, which
 ``--json`` writes as they are to standard output's buffer of bytes.
+
+A measure as the terminal prints it (:func:`measure_text`: the report of
+one object and the label table's rows alike) never reads ``inf``.
 """
 
 from __future__ import annotations
@@ -109,6 +112,56 @@ def non_finite_text(value: float, missing: str, joined: str) -> str:
     'null'
     """
     return repr(value) if joined == ";" and not math.isnan(value) else missing
+
+
+def measure_text(value: float, voxels: int | None = None, step=None, dimension: int = 3) -> str:
+    """A measure as the report prints it: to 6 digits, or where float64
+    holds no such number (a volume of voxels of 1e200: inf) the figure
+    from exact decimal arithmetic where it is ``voxels`` voxels of sizes
+    ``step`` (as ``surface``'s read-back gives the volume), said to be
+    beyond float64; else the words alone, never a bare ``inf``.
+
+    Parameters
+    ----------
+    value : float
+        The measure, float64.
+    voxels : int, optional
+        The voxels whose sizes multiply to it (the volume, or the area in
+        2D); None for a measure of faces (the surface area).
+    step : float or sequence of float, optional
+        The voxel size, one for every axis or one per axis.
+    dimension : int
+        The number of axes.
+
+    Returns
+    -------
+    str
+        The text.
+
+    Examples
+    --------
+    >>> measure_text(8.0)
+    '8'
+    >>> measure_text(float("inf"), 27, [1e200, 1e200, 1e200])
+    '2.7e+601 (beyond float64)'
+    >>> measure_text(float("inf"))
+    "beyond float64's range"
+    """
+    from decimal import Decimal, localcontext
+
+    if math.isfinite(value):
+        return f"{value:.6g}"
+    if voxels is None or step is None:
+        return "beyond float64's range"
+    sizes = list(step) if hasattr(step, "__len__") else [step] * dimension
+    with localcontext() as ctx:
+        ctx.prec = 40
+        exact = Decimal(int(voxels))
+        for size in sizes[:dimension]:
+            exact *= Decimal(float(size))
+        ctx.prec = 6
+        exact = (+exact).normalize()
+    return f"{exact:g} (beyond float64)"
 
 
 def _fill_texts(texts: list[str], chars: np.ndarray, lengths: np.ndarray) -> None:

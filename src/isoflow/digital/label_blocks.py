@@ -31,6 +31,7 @@ from .connectivity import check_connectivity
 from .float64 import unheld_columns
 from .label_table import (
     as_labels,
+    checked_background,
     checked_image,
     columns,
     label_dtype,
@@ -53,6 +54,7 @@ def label_table_blocks(
     labels=None,
     surfaces: bool = True,
     progress: Callable[[int, int], object] | None = None,
+    background: bool = False,
 ) -> dict[str, np.ndarray]:
     """:func:`isoflow.label_table` of a 3D label array read in slabs along
     axis 0, or another (a zarr array, or anything ``array[a:b]`` reads as
@@ -74,7 +76,7 @@ def label_table_blocks(
         there, one along the others; :func:`isoflow.scale.chunks.layer_axes`
         picks it), each read as ``array[index]`` with a slice per axis.
         Default: along axis 0, ``array[a:b]``.
-    pitch, origin, labels, surfaces
+    pitch, origin, labels, surfaces, background
         As :func:`isoflow.label_table`.
     progress : callable, optional
         ``progress(done, total)`` after each slab.
@@ -107,16 +109,17 @@ def label_table_blocks(
     conn = check_connectivity(3, connectivity)
     place = DigitalObject.placement(3, pitch=pitch, origin=origin)
     wanted = None if labels is None else wanted_labels(labels, kind)
+    background = checked_background(background, labels, "label_table_blocks")
     across = None if axes is None or list(axes) == [0, 1, 2] else tuple(int(a) for a in axes)
     read = array if across is None else _Across(array, across)
     nx = int(read.shape[0])
     sizes = [nx] if layers is None else [int(n) for n in layers]
     if nx == 0 and not any(sizes):  # no layer to read (a store of shape (0, ...)): the empty image's table
         return label_table(np.zeros(array.shape, kind), conn, pitch=place.spacing, origin=place.origin,
-                           labels=labels, surfaces=surfaces)
+                           labels=labels, surfaces=surfaces, background=background)
     if sum(sizes) != nx or min(sizes) < 1:
         raise ValueError(f"layers {sizes} do not add up to the array's {nx} layers")
-    found = slab_rows(read, conn, wanted, surfaces, sizes, progress, axes=across or (0, 1, 2))
+    found = slab_rows(read, conn, wanted, surfaces, sizes, progress, axes=across or (0, 1, 2), background=background)
     if across is not None:
         found = rows_in_image_order(found, across)
     return unheld_columns(columns(found, place.spacing, place.origin, surfaces), place.origin, place.spacing,

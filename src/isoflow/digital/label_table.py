@@ -45,7 +45,7 @@ from numpy.typing import ArrayLike
 from ..errors import IsoflowError, check_switch, given_text, scalar_given, warn, whole_given
 from ..results import fields_repr, same_fields
 from ..scale.arrays import FILL_READ, FILL_ZERO, as_array, fill_as, refuse_object
-from ..scale.memory import check_fits
+from ..scale.memory import budget_held, check_fits
 from .closed_surfaces import sweep_tables, use_census
 from .connectivity import check_connectivity, resolve_connectivity
 from .float64 import scaled_counts, scaled_faces, underflow_line, unheld_columns
@@ -252,6 +252,7 @@ def label_table(
     method: Literal["auto", "numpy", "compiled"] = "auto",
     threads: int | np.integer | None = None,
     names: Mapping[int, str] | Sequence[str] | None = None,
+    background: bool = False,
 ) -> dict[str, np.ndarray]:
     """The shape report of every label of a 3D or 2D label image, as columns.
 
@@ -302,6 +303,11 @@ def label_table(
         a :class:`LabelImage`'s ``names``. An empty mapping means no names,
         a LabelImage's too. Without names the table has no ``name``
         column.
+    background : bool
+        With ``labels`` None: the background's row too (label 0, as
+        ``labels=[0]`` gives it, in its place in increasing order), where
+        any voxel is 0, from the same one pass: every label and the space
+        around them (the table of ``info --labels 0-100000``).
 
     Returns
     -------
@@ -357,6 +363,8 @@ def label_table(
     >>> t = label_table(image, labels=[0, 3])
     >>> t["voxels"].tolist(), int((image == 0).sum()), t["b2"].tolist()
     ([152, 8], 152, [1, 0])
+    >>> label_table(image, background=True)["label"].tolist()  # every label, the background among them
+    [0, 3, 7]
 
     A 2D segmentation: a ring of four cells around a fifth
 
@@ -386,14 +394,15 @@ def label_table(
     # among numbers a number)
     place = DigitalObject.placement(vol.ndim, pitch=pitch, origin=origin, function="label_table")
     wanted = None if labels is None else wanted_labels(labels, vol.dtype, "label_table: labels")
+    background = checked_background(background, labels, "label_table")
     if vol.ndim == 2:
         from .planar_labels import planar_table
 
         _use_compiled(vol, "numpy" if check_method(method) == "auto" else method)  # the method checked as in 3D
-        return with_names(unheld_columns(planar_table(vol, conn, place.spacing, place.origin, wanted), place.origin,
-                                         place.spacing, vol.shape), names)
+        return with_names(unheld_columns(planar_table(vol, conn, place.spacing, place.origin, wanted, background),
+                                         place.origin, place.spacing, vol.shape), names)
     with using(threads):
-        found = (piece_rows if _use_compiled(vol, method) else box_rows)(vol, conn, wanted, surfaces)
+        found = (piece_rows if _use_compiled(vol, method) else box_rows)(vol, conn, wanted, surfaces, background)
     return with_names(unheld_columns(columns(found, place.spacing, place.origin, surfaces), place.origin,
                                      place.spacing, vol.shape), names)
 
@@ -605,6 +614,34 @@ def every_other_boxes(vol: np.ndarray) -> int:
     return int(np.prod(extent, axis=1)[values != 0].sum())
 
 
+def checked_background(background: object, labels: object, function: str) -> bool:
+    """``background`` as a bool, refused beside a choice of ``labels``
+    (which asks for the background's row by holding 0).
+
+    Examples
+    --------
+    >>> checked_background(True, None, "label_table")
+    True
+    >>> checked_background(True, [3], "label_table")
+    Traceback (most recent call last):
+    isoflow.errors.IsoflowError: label_table: background=True adds 0's row to every label's; with labels, ask for 0
+    """
+    background = check_switch(background, "background", function)
+    if background and labels is not None:
+        raise IsoflowError(f"{function}: background=True adds 0's row to every label's; with labels, ask for 0")
+    return background
+
+
+def present_labels(piece_values: np.ndarray, dtype) -> np.ndarray:
+    """Every label the pieces hold (values as
+    :func:`~isoflow.scale.pieces.piece_runs` gives them, piece 0 the
+    outside), 0 among them, in increasing order, in the image's type: the
+    rows of every label and the background, once the pieces are known."""
+    values = distinct(piece_values[1:])[0]
+    kind = np.dtype(dtype)
+    return np.sort(values.astype(f"u{kind.itemsize}").view(kind))
+
+
 def wanted_labels(labels, dtype, where: str | None = None) -> np.ndarray:
     """The labels asked for, as values of the image's type: each one a
     whole number (:func:`~isoflow.errors.whole_given`: not ``1.5`` or a
@@ -651,19 +688,23 @@ JOINS = {6: (1, 1, 2, 3), 26: (2, 3, 1, 1)}
 PIECE_BYTES_PER_VOXEL = 1
 
 
-def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool) -> dict:
+def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool,
+               background: bool = False) -> dict:
     """The rows by the compiled passes: the pieces, one vertex pass, the
     graph of pieces label by label (see the module docs); an image of more
     voxels than the pieces are numbered in, in slabs along axis 0 as a
-    store is read (:func:`slab_rows`)."""
+    store is read (:func:`slab_rows`). ``background``: with ``wanted``
+    None, label 0's row too."""
     from ..scale.pieces import MAX_PIECE_VOXELS, piece_runs, vertex_pass
 
     copy = 0 if vol.flags.c_contiguous else vol.nbytes
     check_fits(PIECE_BYTES_PER_VOXEL * vol.size + copy, f"the label table of a {'x'.join(map(str, vol.shape))} "
                f"label image", hint="store it as .zarr and run isoflow info --labels on that (block by block)")
     if vol.size > MAX_PIECE_VOXELS:
-        return slab_rows(np.ascontiguousarray(vol), conn, wanted, surfaces, [vol.shape[0]])
+        return slab_rows(np.ascontiguousarray(vol), conn, wanted, surfaces, [vol.shape[0]], background=background)
     pieces = piece_runs(vol)
+    if background:  # every label present, 0 among them: the pieces say which
+        wanted = present_labels(pieces["values"], vol.dtype)
     want = wanted_pieces(pieces["values"], vol.dtype, wanted)
     # the pairs' blocks read where they are by the graph of pieces, not copied into one set of arrays first
     passed = vertex_pass(vol, pieces, want, feature_table(conn), pass_tables(conn, surfaces), keep_runs=False,
@@ -707,14 +748,16 @@ def rows_in_image_order(found: dict, axes: Sequence[int]) -> dict:
 
 
 def slab_rows(array, conn: int, wanted: np.ndarray | None, surfaces: bool, sizes: list[int],
-              progress: Callable[[int, int], object] | None = None, axes: Sequence[int] = (0, 1, 2)) -> dict:
+              progress: Callable[[int, int], object] | None = None, axes: Sequence[int] = (0, 1, 2),
+              background: bool = False) -> dict:
     """The rows of a 3D label array read in slabs of ``sizes`` voxel layers
     along axis 0 (``array[a:b]``, never whole; cut further where a slab
     would hold more voxels than the pieces are numbered in; for an array
     that is not in memory, each boundary a layer lower,
     :func:`one_read_sizes`), with
     ``progress(done, total)`` after each slab; ``axes``: the image's axes
-    in the order the array reads them, which its refusals name."""
+    in the order the array reads them, which its refusals name;
+    ``background``: with ``wanted`` None, label 0's row too."""
     # every layer's cuts first: a layer too wide for the pieces' numbers is refused before any read
     cuts = [slab_sizes([n], array.shape, axes) for n in sizes]
     if not isinstance(array, np.ndarray):
@@ -726,6 +769,7 @@ def slab_rows(array, conn: int, wanted: np.ndarray | None, surfaces: bool, sizes
         if all(len(parts) == 1 for parts in shifted_cuts):  # (a layer cut into thinner slabs is held whole)
             cuts = shifted_cuts
     stream = SlabStream(array, conn, wanted, surfaces, axes)
+    stream.background = background
     stream.thickest = min(max((max(parts, default=0) for parts in cuts), default=0) + 2, stream.nx)
     total, done, x0 = sum(len(parts) for parts in cuts), 0, 0
     for parts in cuts:
@@ -738,7 +782,10 @@ def slab_rows(array, conn: int, wanted: np.ndarray | None, surfaces: bool, sizes
             if progress is not None:
                 progress(done, total)
         stream.held = None
-    return rows_of_pieces(*stream.joined(), label_dtype(array.dtype), conn, wanted)
+    pieces, passed = stream.joined()
+    if background:  # every label the slabs hold, 0 among them
+        wanted = present_labels(pieces["values"], label_dtype(array.dtype))
+    return rows_of_pieces(pieces, passed, label_dtype(array.dtype), conn, wanted)
 
 
 def one_read_sizes(sizes: Sequence[int]) -> list[int]:
@@ -778,10 +825,14 @@ def label_bits(labels: np.ndarray, dtype) -> np.ndarray:
     return np.asarray(labels, dtype=dtype).view(f"u{width}").astype(np.uint64)
 
 
-def wanted_pieces(values: np.ndarray, dtype, wanted: np.ndarray | None) -> np.ndarray:
+def wanted_pieces(values: np.ndarray, dtype, wanted: np.ndarray | None, background: bool = False) -> np.ndarray:
     """Per piece (values as :func:`~isoflow.scale.pieces.piece_runs`
-    gives them, 0 the outside), whether its label has a row."""
-    want = values != 0 if wanted is None else np.isin(values, label_bits(wanted, dtype))
+    gives them, 0 the outside), whether its label has a row (with
+    ``wanted`` None, every nonzero label's, with ``background`` 0's too)."""
+    if wanted is None:
+        want = np.ones(len(values), bool) if background else values != 0
+    else:
+        want = np.isin(values, label_bits(wanted, dtype))
     want[0] = False
     return want
 
@@ -983,6 +1034,8 @@ class SlabStream:
         self.held: tuple[int, np.ndarray] | None = None
         #: the voxel layers of the thickest slab's read (:func:`slab_rows` sets it), for what chunks would fit
         self.thickest = self.nx
+        #: with ``wanted`` None, whether the background's pieces are wanted too (:func:`slab_rows` sets it)
+        self.background = False
 
     def in_image_order(self, sides: Sequence[int]) -> list[int]:
         """Sides given along the axes as the array reads them, in the image's (x, y, z) order."""
@@ -1090,7 +1143,7 @@ class SlabStream:
             vol = np.ascontiguousarray(read if carried is None else np.concatenate([carried, read]))
         self.carry = None if b == self.nx or isinstance(self.array, np.ndarray) else (b - 2, vol[-2:].copy())
         pieces = piece_runs(vol, first=x0 - a, last=x1 - a, x0=a, axis=along)
-        want = wanted_pieces(pieces["values"], vol.dtype, self.wanted)
+        want = wanted_pieces(pieces["values"], vol.dtype, self.wanted, self.background)
         passed = vertex_pass(vol, pieces, want, feature_table(self.conn), pass_tables(self.conn, self.surfaces),
                              layers=(x0, x1 + (x1 == self.nx)), nx=self.nx, x0=a, base=self.total, axis=along)
         if self.tail is not None:  # voxel layers x0 - 1 and x0, read by both slabs: one piece, two numbers
@@ -1175,39 +1228,43 @@ def same_pieces(total: int, same: list) -> np.ndarray:
     return rank[comp]
 
 
-def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool) -> dict:
+def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool,
+             background: bool = False) -> dict:
     """The rows by NumPy: ``analyze`` of each label's box plus one voxel
     (outside the box everything is the label's complement, so the report
-    is the whole image's), the voxels of every label from one sort."""
+    is the whole image's), the voxels of every label from one sort;
+    ``background``: with ``wanted`` None, label 0's row too."""
     from .analysis import analyze
 
     flat = vol.reshape(-1)
     order = np.argsort(flat, kind="stable")
     values, starts = np.unique(flat[order], return_index=True)
-    labels = values[values != 0] if wanted is None else wanted.astype(values.dtype)
+    labels = (values if background else values[values != 0]) if wanted is None else wanted.astype(values.dtype)
     ends = np.append(starts[1:], flat.size)
     found = {"label": labels, "voxels": np.zeros(len(labels), np.int64), "sums": np.zeros((len(labels), 3)),
              "lo": np.zeros((len(labels), 3), np.int64), "hi": np.full((len(labels), 3), -1, np.int64),
              "features": np.zeros((len(labels), 17), np.int64), "doubled": np.zeros(len(labels), np.int64),
              "b0": np.zeros(len(labels), np.int64), "b2": np.zeros(len(labels), np.int64)}
     surfs: list[tuple[int, int, int]] = []
-    for row, label in enumerate(labels):
-        at = np.searchsorted(values, label)
-        if at == len(values) or values[at] != label:
-            continue
-        where = np.stack(np.unravel_index(order[starts[at]:ends[at]], vol.shape), axis=1)
-        lo, hi = where.min(axis=0), where.max(axis=0)
-        box = np.pad(vol[tuple(slice(a, b + 1) for a, b in zip(lo, hi))] == label, 1)
-        # the pass is chosen once for the whole image (_use_compiled): the
-        # boxes do not add to the tally of "auto", which would load numba
-        # part way through this call
-        report = analyze(box, conn, surfaces=surfaces, method="compiled" if use_census(box, surfaces) else "numpy")
-        found["voxels"][row], found["sums"][row] = len(where), where.sum(axis=0)
-        found["lo"][row], found["hi"][row] = lo, hi
-        found["b0"][row], found["b2"][row] = report["betti"][0], report["betti"][2]
-        found["features"][row] = _report_features(report, box)
-        found["doubled"][row] = report.get("doubled_edges", 0)
-        surfs += [(row, s["euler_characteristic"], s["faces"]) for s in report.get("surfaces", ())]
+    # each box's analyze checks its memory: the memory available read once for them all
+    with budget_held():
+        for row, label in enumerate(labels):
+            at = np.searchsorted(values, label)
+            if at == len(values) or values[at] != label:
+                continue
+            where = np.stack(np.unravel_index(order[starts[at]:ends[at]], vol.shape), axis=1)
+            lo, hi = where.min(axis=0), where.max(axis=0)
+            box = np.pad(vol[tuple(slice(a, b + 1) for a, b in zip(lo, hi))] == label, 1)
+            # the pass is chosen once for the whole image (_use_compiled): the
+            # boxes do not add to the tally of "auto", which would load numba
+            # part way through this call
+            report = analyze(box, conn, surfaces=surfaces, method="compiled" if use_census(box, surfaces) else "numpy")
+            found["voxels"][row], found["sums"][row] = len(where), where.sum(axis=0)
+            found["lo"][row], found["hi"][row] = lo, hi
+            found["b0"][row], found["b2"][row] = report["betti"][0], report["betti"][2]
+            found["features"][row] = _report_features(report, box)
+            found["doubled"][row] = report.get("doubled_edges", 0)
+            surfs += [(row, s["euler_characteristic"], s["faces"]) for s in report.get("surfaces", ())]
     table = np.array(surfs, np.int64).reshape(-1, 3)
     found.update(surface_rows=table[:, 0], surface_chi=table[:, 1], surface_faces=table[:, 2])
     return found

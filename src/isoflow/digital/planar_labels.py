@@ -55,7 +55,7 @@ HISTOGRAM_LABELS = 1 / 16
 
 
 def planar_table(image: np.ndarray, conn: int, spacing: np.ndarray, origin: np.ndarray,
-                 wanted: np.ndarray | None) -> dict[str, np.ndarray]:
+                 wanted: np.ndarray | None, background: bool = False) -> dict[str, np.ndarray]:
     """The table of a 2D label image (the columns of :data:`PLANAR_COLUMNS`).
 
     Parameters
@@ -71,6 +71,8 @@ def planar_table(image: np.ndarray, conn: int, spacing: np.ndarray, origin: np.n
         The labels to report, in this order (None: every nonzero label
         present, in increasing order); an absent one gets a row of zeros
         (NaN box and centroid).
+    background : bool
+        With ``wanted`` None, label 0's row too, where any pixel is 0.
 
     Returns
     -------
@@ -98,7 +100,7 @@ def planar_table(image: np.ndarray, conn: int, spacing: np.ndarray, origin: np.n
     b0 = _components(dense, conn, k)
     edges = _boundary_edges(padded, k)
     if wanted is None:
-        rows = np.flatnonzero((values != 0) & (counts[1:] > 0)) + 1
+        rows = np.flatnonzero(((values != 0) | background) & (counts[1:] > 0)) + 1
         labels = values[rows - 1]
     elif not len(values):  # an image of no pixels: every label absent
         rows, labels = np.zeros(len(wanted), np.int64), np.asarray(wanted, dtype=values.dtype)

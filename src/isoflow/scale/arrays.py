@@ -331,6 +331,50 @@ def refuse_masked(array: object, where: str = "volume") -> None:
         )
 
 
+#: elements of a float volume looked at at a time for values other than 0
+#: and 1: the look's two bool temporaries stay a small part of the volume
+#: (the whole volume's would be two bytes a voxel, twice a uint8 volume)
+CHECKED_AT_ONCE = 1 << 18
+
+
+def holds_other_values(arr: np.ndarray) -> bool:
+    """Whether a numeric array holds a value other than 0 and 1 (NaN
+    too), looked for without a temporary array of the whole: an integer
+    array by its least and greatest value, a float one a block of
+    :data:`CHECKED_AT_ONCE` elements at a time.
+
+    Parameters
+    ----------
+    arr : numpy.ndarray
+        Integers or floats, of any shape and layout.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> holds_other_values(np.array([[0, 1], [1, 0]], np.uint8)), holds_other_values(np.array([0, 2]))
+    (False, True)
+    >>> holds_other_values(np.array([0.0, np.nan])), holds_other_values(np.zeros((0, 3)))
+    (True, False)
+    """
+    if not arr.size:
+        return False
+    if arr.dtype.kind in "iu":
+        return bool(arr.max() > 1) or (arr.dtype.kind == "i" and bool(arr.min() < 0))
+    if arr.ndim == 0:
+        return not (arr == 0 or arr == 1)
+    step = max(1, CHECKED_AT_ONCE // max(1, arr.size // arr.shape[0]))
+    for start in range(0, arr.shape[0], step):
+        part = arr[start:start + step]
+        other = part != 0  # NaN is caught too: NaN != 0 and NaN != 1
+        other &= part != 1
+        if other.any():
+            return True
+    return False
+
+
 def binary(array, where: str = "volume", near=None, canonical: bool = True, remedy: str | None = None,
            remedy_dims: tuple[int, ...] = (2, 3)) -> np.ndarray:
     """A host boolean volume from a 0/1 array, or a clear error saying why not.
@@ -378,8 +422,8 @@ e.g. 2); threshold it first, e.g. image > 0, or one label at a time, e.g. flow_s
     thing = "image" if arr.ndim == 2 else "volume"
     if arr.dtype.kind not in "iuf":
         raise IsoflowError(f"{where}: array of type {arr.dtype} is not a binary {thing}")
-    bad = (arr != 0) & (arr != 1)  # NaN is caught too: NaN != 0 and NaN != 1
-    if bad.any():
+    if holds_other_values(arr):
+        bad = (arr != 0) & (arr != 1)  # NaN is caught too: NaN != 0 and NaN != 1
         value, nbad = arr[bad].flat[0], int(bad.sum())
         # the count is of voxels (not of distinct values), and of this block
         # only where the volume is checked block by block

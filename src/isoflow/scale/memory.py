@@ -11,7 +11,9 @@ that is less.
 
 from __future__ import annotations
 
+import contextlib
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +26,44 @@ from ..errors import IsoflowError, given_text, whole_given
 PROC_SELF = Path("/proc/self")
 MEMINFO = Path("/proc/meminfo")
 CGROUPS = Path("/sys/fs/cgroup")
+
+
+#: the budgets :func:`budget_held` holds, innermost last (one for the
+#: whole process, its threads too: a run's writers are threads)
+_HELD: list[int] = []
+
+
+@contextlib.contextmanager
+def budget_held(budget: int | None = None) -> Iterator[int]:
+    """Within it, :func:`default_budget` answers one budget, read once on
+    entry (or ``budget``): a run that checks each of its many outputs (a
+    surface per label, each file read back) reads the memory available
+    and its control groups' limits once, not once an output.
+
+    Parameters
+    ----------
+    budget : int, optional
+        The bytes to answer; default: :func:`default_budget` now.
+
+    Yields
+    ------
+    int
+        The budget held.
+
+    Examples
+    --------
+    >>> with budget_held(10**6) as held:
+    ...     held, default_budget()
+    (1000000, 1000000)
+    >>> default_budget() == 10**6
+    False
+    """
+    held = default_budget() if budget is None else int(budget)
+    _HELD.append(held)
+    try:
+        yield held
+    finally:
+        _HELD.pop()
 
 
 def default_budget() -> int:
@@ -47,7 +87,11 @@ def default_budget() -> int:
     --------
     >>> 0 < default_budget() <= 0.9 * meminfo_available()
     True
+
+    Within :func:`budget_held`, the budget it read on entry.
     """
+    if _HELD:
+        return _HELD[-1]
     available, group = meminfo_available(), cgroup_room()
     budgets = [room * 9 // 10 for room in (available, group) if room is not None]
     if available is None:
