@@ -103,45 +103,64 @@ def take_notes() -> list[str]:
     return notes
 
 
-def show_worker_notes(client):
+def show_worker_notes(client, unless=None):
     """isoflow's notes from the worker processes, logged here as this
     process's own (and so printed once for all workers, as
     ``zarr_cluster.py: note: ...``). A worker that does not answer (one
     that died mid-run) is left out, and a poll that fails (a client
     closing) is skipped in silence: the notes only explain a wait, and the
-    run's own result or error is what the script reports."""
+    run's own result or error is what the script reports. Nothing is
+    logged once the event ``unless`` is set (the run gave up on this poll)."""
     try:
         replies = client.run(take_notes, on_error="ignore")
     except Exception:  # the connection's own error, of any class (a closed client's AttributeError)
+        return
+    if unless is not None and unless.is_set():
         return
     for notes in replies.values():
         for note in notes:
             logging.getLogger("isoflow").info(note)
 
 
+#: seconds the end of a run waits for the last poll of the workers' notes
+#: (a poll answers in milliseconds; one that hangs is given up)
+LAST_POLL_SECONDS = 10.0
+
+
 @contextmanager
-def worker_notes(client, every=1.0):
+def worker_notes(client, every=1.0, wait=None):
     """Show the workers' notes while isoflow's calls run: on numba's empty
     cache each worker compiles the voxeliser's passes for minutes, which
     only its note explains. Asked for every ``every`` seconds, and once
     more at the end, so that none is missed; a poll that fails says
     nothing (:func:`show_worker_notes`), so the run's own error is the one
-    raised."""
+    raised.
+
+    The polls, the last one too, run on a thread, and the run's end waits
+    for them at most ``wait`` seconds (None: :data:`LAST_POLL_SECONDS`): a
+    poll that hangs (a worker that never answers: ``client.run`` has no
+    time limit) held the script for ever once its run was done. One that
+    hangs is given up in silence, as a failed one is: the notes only
+    explain a wait that is over by then, and a line about them would stand
+    beside the run's own result or error, which is what the script
+    reports; what the poll brings later is not printed (it would come
+    after the run's report)."""
     client.run(keep_notes)
-    done = threading.Event()
+    done, given_up = threading.Event(), threading.Event()
 
     def ask():
         while not done.wait(every):
-            show_worker_notes(client)
+            show_worker_notes(client, given_up)
+        show_worker_notes(client, given_up)  # the last notes, once the run is over
 
-    asking = threading.Thread(target=ask, daemon=True)
+    asking = threading.Thread(target=ask, daemon=True)  # a hung poll does not hold the interpreter's exit
     asking.start()
     try:
         yield
     finally:
         done.set()
-        asking.join()
-        show_worker_notes(client)
+        asking.join(LAST_POLL_SECONDS if wait is None else wait)
+        given_up.set()
 
 
 def main():

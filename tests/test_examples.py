@@ -207,6 +207,47 @@ def test_zarr_cluster_s_failed_note_poll_is_quiet(monkeypatch, capfd):
     assert capfd.readouterr().err == ""
 
 
+def test_zarr_cluster_s_hung_note_poll_is_given_up(monkeypatch, caplog):
+    """A poll of the workers' notes that hangs (a worker that never
+    answers: ``client.run`` has no time limit) held zarr_cluster.py for
+    ever at the end of its run, which joined the polling thread without a
+    limit. The end now waits a few seconds and goes on in silence, as a
+    failed poll does, and a note that comes after that is not printed."""
+    import logging
+    import threading
+    import time
+
+    monkeypatch.syspath_prepend(str(EXAMPLES))
+    import zarr_cluster
+
+    release = threading.Event()
+
+    class Hung:
+        def run(self, function, **kwargs):
+            if function is zarr_cluster.keep_notes:  # asked once, before the run
+                return {}
+            release.wait()  # no answer until the test ends it
+            return {"tcp://127.0.0.1:1": ["a late note"]}
+
+    caplog.set_level(logging.INFO, logger="isoflow")
+    monkeypatch.setattr(zarr_cluster, "LAST_POLL_SECONDS", 0.1, raising=False)
+    ended = []
+
+    def script():
+        with zarr_cluster.worker_notes(Hung(), every=0.01):
+            time.sleep(0.05)
+        ended.append(time.monotonic())
+
+    began = time.monotonic()
+    body = threading.Thread(target=script, daemon=True)
+    body.start()
+    body.join(10)
+    release.set()
+    time.sleep(0.1)  # the hung polls answer now, after the run gave them up
+    assert ended and ended[0] - began < 5
+    assert [r for r in caplog.records if r.name == "isoflow"] == []
+
+
 def test_voxelize_topology(example_run):
     out, printed = example_run("voxelize_topology")
     g = genus("torus.obj")

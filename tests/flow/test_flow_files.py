@@ -77,6 +77,31 @@ def test_26_connected_flow_step_files_and_their_check_columns(tmp_path):
     assert f"{len(plys)} of {len(plys)} step surfaces read back by trimesh" in stdout
 
 
+def test_a_step_file_names_its_vertex_columns_as_a_surface_file_does(tmp_path):
+    """A step's PLY carried per-vertex columns (config, class, gamma, a, f)
+    that no comment named, where ``isoflow surface``'s PLY names them. The
+    columns its comment names are the ones trimesh reads beside the
+    position and colour, in the header's order."""
+    v = np.zeros((5, 5, 5), bool)
+    v[1:4, 1:4, 1:4] = True
+    np.save(tmp_path / "v.npy", v)
+    assert run("flow", tmp_path / "v.npy", "--steps", "1", "--out", tmp_path / "run", "--no-check")[0] == 0
+    ply = tmp_path / "run" / "step_000.ply"
+    header = ply.read_bytes().split(b"end_header")[0].decode("ascii").splitlines()
+    named = [line.split(":", 1)[1] for line in header if line.startswith("comment per-vertex:")]
+    assert len(named) == 1, header
+    # "config byte, class (gamma+4; ...), gamma (...), ...": each column's name, its notes left out
+    columns = [part.split()[0] for part in re.sub(r"\([^)]*\)", "", named[0]).split(",")]
+    vertex = header.index(next(line for line in header if line.startswith("element vertex")))
+    element = header[vertex + 1:]
+    element = element[: next((i for i, line in enumerate(element) if line.startswith("element")), len(element))]
+    in_header = [line.split()[-1] for line in element if line.startswith("property ")]
+    read = trimesh.load(ply, process=False).metadata["_ply_raw"]["vertex"]["data"].dtype.names
+    assert list(read) == in_header
+    assert columns == [name for name in in_header if name not in ("x", "y", "z", "red", "green", "blue")]
+    assert columns == ["config", "class", "gamma", "a", "f"]  # as docs/formats.md lists them
+
+
 def test_flow_step_file_that_reads_differently_exits_1(tmp_path, monkeypatch):
     from isoflow.mesh import export
 
@@ -321,6 +346,102 @@ def test_a_rename_that_fails_part_way_says_what_it_replaced(tmp_path, monkeypatc
         assert "unchanged" not in err and "1 of this run's" in err and "files of both runs" in err
     assert not [f for f in out.iterdir() if f.name.startswith(".")]  # the staging directory is gone
 
+
+@pytest.mark.parametrize("kind,name", [("link", "step_000.ply"), ("store", "step_001.zarr")])
+def test_a_rename_that_fails_after_the_previous_entry_went_says_it_went(tmp_path, monkeypatch, kind, name):
+    """A link or a step store at a step's name goes before the rename that
+    puts this run's file there; that rename failing (an I/O error) said
+    "the previous run's files in the directory are unchanged" (a link) or
+    "could not remove the previous run's step store" (a store that was
+    removed whole). The line now says that the previous entry was removed
+    and that nothing is at its name; a link's target stays."""
+    import os
+
+    v = np.zeros((8, 8, 8), bool)
+    v[2:6, 2:6, 2:6] = True
+    np.save(tmp_path / "v.npy", v)
+    out = tmp_path / "run"
+    extra = ["--volumes", ".zarr"] if kind == "store" else []
+    assert run("flow", tmp_path / "v.npy", "--steps", "1", "--out", out, "--no-check", *extra)[0] == 0
+    mine = tmp_path / "mine.ply"
+    if kind == "link":  # the user's own file, linked under a step's name
+        (out / name).rename(mine)
+        (out / name).symlink_to(mine)
+    assert (out / name).is_symlink() or (out / name).is_dir()
+    before = {f.name: f.read_bytes() for f in out.iterdir() if f.is_file() and not f.is_symlink()}
+    real = os.replace
+
+    def failing(src, dst, *a, **k):
+        if Path(dst) == out / name:
+            raise OSError(5, "Input/output error", str(dst))
+        return real(src, dst, *a, **k)
+
+    monkeypatch.setattr(os, "replace", failing)
+    rc, _, err = run("flow", tmp_path / "v.npy", "--steps", "1", "--out", out, "--force", "--no-check", *extra)
+    monkeypatch.setattr(os, "replace", real)
+    assert rc == 2 and len(err.strip().splitlines()) == 1, err
+    assert not (out / name).exists() and not (out / name).is_symlink()  # the previous entry is gone
+    assert f"the previous run's {name} (a {'link' if kind == 'link' else 'step store'}" in err
+    assert "was removed, and this run's was not put in its place" in err and "could not remove" not in err
+    assert "files in the directory are unchanged" not in err
+    if kind == "link":
+        assert mine.is_file()  # what the link led to is the user's
+    after = {f.name: f.read_bytes() for f in out.iterdir() if f.is_file()}
+    if name == "step_000.ply":  # the first rename: the previous run's other files are as they were
+        assert after == {n: b for n, b in before.items() if n != name}
+        assert err.strip().endswith("the previous run's other files are unchanged: run the flow again")
+    else:  # step_000's store and surface went in first
+        assert "2 of this run's" in err and "files of both runs" in err
+    assert not [f for f in out.iterdir() if f.name.startswith(".")]  # the staging directory is gone
+
+
+def test_a_second_interrupt_while_the_previous_run_goes_names_what_is_left(tmp_path, capsys, monkeypatch):
+    """Ctrl-C while the previous run's files that the new run does not
+    replace were removed, and again (past the second within which a
+    repeat is ignored) as the staging directory went: the second, bare,
+    interrupt was worded "stopped after the run was complete", with files
+    of the previous run left beside the new one's. The line now names
+    the ones removed and the ones left, as the directory holds them."""
+    import shutil
+
+    from isoflow.flow import files
+    from isoflow.mesh.outputs import TEMP_MARK
+
+    big, small = np.zeros((8, 8, 8), bool), np.zeros((8, 8, 8), bool)
+    big[1:7, 1:7, 1:7] = True  # the previous run: more steps than the new one
+    small[2:5, 2:5, 2:5] = True
+    np.save(tmp_path / "big.npy", big)
+    np.save(tmp_path / "small.npy", small)
+    out, fresh = tmp_path / "o", tmp_path / "fresh"
+    assert main(["flow", str(tmp_path / "big.npy"), "--out", str(out), "--no-check"]) == 0
+    assert main(["flow", str(tmp_path / "small.npy"), "--out", str(fresh), "--no-check"]) == 0
+    before, written = {p.name for p in out.iterdir()}, {p.name for p in fresh.iterdir()}
+    real_remove, real_rmtree, removals, stops = files.remove_entry, shutil.rmtree, [], []
+
+    def remove(path):
+        removals.append(path)
+        if len(removals) == 2:  # the first interrupt, one file of the previous run removed
+            raise KeyboardInterrupt
+        real_remove(path)
+
+    def rmtree(path, *args, **kwargs):
+        if Path(path).name.startswith(f".{files.STAGE}{TEMP_MARK}") and not stops:  # the second, as the stage goes
+            stops.append(path)
+            raise KeyboardInterrupt
+        return real_rmtree(path, *args, **kwargs)
+
+    monkeypatch.setattr(files, "remove_entry", remove)
+    monkeypatch.setattr(shutil, "rmtree", rmtree)
+    capsys.readouterr()
+    assert main(["flow", str(tmp_path / "small.npy"), "--out", str(out), "--force", "--no-check"]) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    monkeypatch.setattr(shutil, "rmtree", real_rmtree)
+    after = {p.name for p in out.iterdir()}
+    gone, left = sorted(before - written - after), sorted(before - written & after)
+    assert stops and len(gone) == 1 and len(left) >= 2 and written <= after
+    assert len(err) == 1 and "complete" not in err[0], err
+    assert f"1 of them was removed ({gone[0]})" in err[0], err
+    assert f"{len(left)} are left beside them ({', '.join(left[:3])}" in err[0], err
 
 @pytest.mark.parametrize("at", ["progress_bar", "bar_total"])
 @pytest.mark.parametrize("store", [False, True])
@@ -812,9 +933,11 @@ def test_an_interrupt_once_the_run_is_in_place_says_so(tmp_path, capsys, monkeyp
     after = {p.name for p in out.iterdir()}
     if where == "at the directory's sync":  # before the previous run's other files were removed
         assert after == before | written
+        left = sorted(before - written)
         assert err == [f"isoflow: interrupted: {out}: interrupted after the run's files were put in place; this "
-                       f"run's {len(written)} files are in place; some of the previous run's files may be left "
-                       "beside them"], err
+                       f"run's {len(written)} files are in place; of the previous run's {len(left)} files that it "
+                       f"does not replace, none of them was removed, {len(left)} are left beside them "
+                       f"({', '.join(left[:3])}{f' and {len(left) - 3} more' if len(left) > 3 else ''})"], err
     else:
         assert after == written
         assert err == [f"isoflow: interrupted: {out}: stopped after the run was complete; its {len(written)} files "

@@ -63,6 +63,13 @@ def _step_file_pattern() -> re.Pattern:
     return re.compile(r"step_\d+(" + "|".join(re.escape(s) for s in suffixes) + r")", re.IGNORECASE)
 
 
+def _some_names(paths: list[Path], shown: int = 3) -> str:
+    """The names of ``paths``, the first ``shown`` of them and how many
+    more (a run of hundreds of steps leaves as many files)."""
+    names = sorted(p.name for p in paths)
+    return ", ".join(names[:shown]) + (f" and {len(names) - shown} more" if len(names) > shown else "")
+
+
 def step_width(last_step: int) -> int:
     """Digits of the step numbers in file names (``step_007.ply``), enough
     for the last step and at least three, so that names sort as steps do.
@@ -361,6 +368,9 @@ class FlowWriter:
         self.width = step_width(last_step)
         self.staged: list[str] = []  # names written into the staging directory
         self.in_place = False  # every staged file is moved into the directory (_commit)
+        # the previous run's files that this run does not replace, once _commit has listed them: those still
+        # there when an interrupt or an error stops their removal are named as left
+        self.earlier: list[Path] | None = None
         self.checks: dict[int, dict] = {}
         self.problems: list[str] = []
         self.check = check  # read every step file back with trimesh
@@ -392,7 +402,9 @@ class FlowWriter:
             return
         mesh = boundary_mesh(state.volume, self.connectivity)
         name = f"step_{step:0{self.width}d}.ply"
-        comments = (f"isoflow flow step {step}, parity {state.parity}, {self.connectivity}-connectivity",)
+        # the columns named as in `isoflow surface`'s PLY: a step file is read on its own, away from this run
+        comments = (f"isoflow flow step {step}, parity {state.parity}, {self.connectivity}-connectivity",
+                    export.VERTEX_COMMENT)
         with self._named():  # flushed to the disk on the worker thread
             written = export.write_mesh_file(self.stage / name, mesh, state, force=True, comments=comments, sync=False)
         self.staged.append(name)
@@ -559,68 +571,107 @@ class FlowWriter:
         a step (not while a file is written) says nothing, and the command
         then did not say that the previous run's files are unchanged. One
         raised once every file of this run is in place (as the staging
-        directory goes, or after :meth:`finish` returned) says so: the
-        run's files are complete, the previous run's are gone."""
+        directory goes, or after :meth:`finish` returned) says so, and
+        which of the previous run's files it does not replace are gone and
+        which are left: a second interrupt, as the first one's removal of
+        them was being wound up, said the run was complete."""
         if str(exc).strip():
             return exc
         if self.in_place:
-            return KeyboardInterrupt(f"{self.out}: stopped after the run was complete; its {len(self.staged)} files "
-                                     "are in place")
+            left = self._earlier_left()
+            if not left:
+                return KeyboardInterrupt(f"{self.out}: stopped after the run was complete; its {len(self.staged)} "
+                                         "files are in place")
+            return KeyboardInterrupt(f"{self.out}: stopped while the previous run's files were removed; this run's "
+                                     f"{len(self.staged)} files are in place{left}")
         return KeyboardInterrupt(self.kept(f"{self.out}: stopped while the flow ran"))
 
     def _commit(self) -> list:
         """Move the staged files over the output directory's, then remove the
         previous run's files that this run did not replace. A failure (or an
         interrupt) part way says what it left: the previous run unchanged
-        only where none of this run's files was put in place yet."""
+        only where none of this run's files was put in place yet and none of
+        the previous run's was removed."""
         new = set(self.staged)
         with self._named():  # a signal a library swallowed: the previous run stays
             interrupted_by_signal()
-        done, target, emptied = 0, self.out, False
+        done, target, previous = 0, self.out, None
         try:
             for name in self.staged:
                 target = self.out / name
                 # a rename takes neither a link of a step store's name, nor a zarr step volume (a directory),
                 # nor a file where a store is staged: each goes first (what a link leads to is kept)
                 if target.is_symlink() or target.is_dir() or target.exists() and (self.stage / name).is_dir():
-                    emptied = target.is_dir() and not target.is_symlink()  # the previous store may be partly gone
+                    previous = "link" if target.is_symlink() else "step store" if target.is_dir() else "file"
                     remove_entry(target)
                 os.replace(self.stage / name, target)
-                done, emptied = done + 1, False
+                done, previous = done + 1, None
             self.in_place = True
             target = self.out
+            self.earlier = [old for old in _run_names(self.out)
+                            if old.name not in new and (old.exists() or old.is_symlink())]
             sync_directory(self.out)
-            for old in _run_names(self.out):
+            for old in self.earlier:
                 target = old
-                if old.name not in new and (old.exists() or old.is_symlink()):
-                    # a step name that is a link goes as the step file it stands for; what it names is the user's
-                    remove_entry(old)
+                # a step name that is a link goes as the step file it stands for; what it names is the user's
+                remove_entry(old)
         except (OSError, KeyboardInterrupt) as exc:
-            line = self._commit_left(target, exc, done, emptied)
+            line = self._commit_left(target, exc, done, previous)
             raise (KeyboardInterrupt if isinstance(exc, KeyboardInterrupt) else IsoflowError)(line) from None
         finally:
             shutil.rmtree(self.stage, ignore_errors=True)
         return [self.out / name for name in self.staged]
 
-    def _commit_left(self, target: Path, exc: BaseException, done: int, emptied: bool) -> str:
+    def _earlier_left(self) -> str:
+        """What is left of the previous run's files that this run does not
+        replace, once this run's are in place: ``""`` where none is (or
+        there was no previous run), else which of them were removed and
+        which are still there, as found in the directory now."""
+        if self.earlier is None:  # stopped before they were listed
+            return "; some of the previous run's files may be left beside them" if self.had_files else ""
+        left = [old for old in self.earlier if old.exists() or old.is_symlink()]
+        if not left:
+            return ""
+        gone = [old for old in self.earlier if old not in left]
+        was = "was" if len(gone) == 1 else "were"
+        removed = f"{len(gone)} of them {was} removed ({_some_names(gone)}), " if gone else "none of them was removed, "
+        return (f"; of the previous run's {len(self.earlier)} files that it does not replace, {removed}"
+                f"{len(left)} {'is' if len(left) == 1 else 'are'} left beside them ({_some_names(left)})")
+
+    def _commit_left(self, target: Path, exc: BaseException, done: int, previous: str | None) -> str:
         """The line of a failure (or an interrupt) while :meth:`_commit` put
-        ``done`` of the staged files in place, at ``target`` (``emptied``:
-        while the previous run's step store there was being removed)."""
+        ``done`` of the staged files in place, at ``target`` (``previous``:
+        the kind of the previous run's entry there, a link, a step store or
+        a file, that was being removed, or was removed, to make room for
+        this run's)."""
         total = len(self.staged)
+        # the previous entry at the target: what its removal did, as the directory shows it now
+        gone = previous is not None and not (target.exists() or target.is_symlink())
+        partly = previous == "step store" and not gone
         if isinstance(exc, OSError):
             cause = exc.strerror or str(exc) or type(exc).__name__
-            what = f"could not remove the previous run's step store ({cause})" if emptied else \
+            what = f"could not remove the previous run's step store ({cause})" if partly else \
                 f"could not put it in place ({cause})" if done < total else f"could not finish the run ({cause})"
         else:
             what = "interrupted after the run's files were put in place" if done == total else \
                 "interrupted while putting the run's files in place"
         if done == total:  # stopped as the previous run's files that this one did not replace were removed
-            left = "; some of the previous run's files may be left beside them" if self.had_files else ""
-            return f"{target}: {what}; this run's {total} files are in place{left}"
-        if done == 0 and not emptied:
+            return f"{target}: {what}; this run's {total} files are in place{self._earlier_left()}"
+        if gone:  # the previous entry went to make room, and this run's copy goes with the staging directory
+            kept = "; what it led to is kept" if previous == "link" else ""
+            removed = (f"the previous run's {target.name} (a {previous}{kept}) was removed, and this run's was not put "
+                       f"in its place and went with the staging directory: no {target.name} is there now")
+        if done == 0 and not (gone or partly):
             return self.kept(f"{target}: {what}")
+        if done == 0:
+            left = removed if gone else f"{target.name} of the previous run may be partly removed"
+            if self.had_files:
+                left += "; the previous run's other files are unchanged: run the flow again"
+            return f"{target}: {what}; {left}"
         left = f"{done} of this run's {total} files were put in place before it, the rest were not"
-        if emptied:
+        if gone:
+            left += f"; {removed}"
+        elif partly:
             left += f", and {target.name} of the previous run may be partly removed"
         if self.had_files:
             left += "; the directory holds files of both runs: run the flow again"
