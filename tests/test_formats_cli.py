@@ -1589,33 +1589,64 @@ def test_an_ilastik_export_is_placed_by_its_axistags_not_mirrored(tmp_path, size
     assert np.isclose(mesh.volume, len(cells) * np.prod(size))
 
 
-def test_a_plain_zarr_array_named_z_y_x_says_it_is_read_as_stored(tmp_path):
-    """A plain zarr v3 array (no OME-Zarr metadata) is read as stored,
-    axis 0 as x (docs/formats.md); one whose ``dimension_names`` are z, y,
-    x (as tensorstore and xarray write them) was read so without a word:
-    the mirror image of the volume its names describe, x and z swapped.
-    Each command says so once, naming the names zarr gives; an array
-    named x, y, z gets no word."""
+def test_a_plain_zarr_array_named_z_y_x_is_read_by_its_names(tmp_path, capsys):
+    """A plain zarr v3 array (no OME-Zarr metadata) whose
+    ``dimension_names`` are z, y, x (as xarray and tensorstore write them)
+    was read as stored, its z as x, with a warning: the mirror image of
+    the volume its names describe. It is read by its names, as OME-Zarr's
+    axes are, in memory and block by block (odd chunks): a bar along the
+    stored axis 0 lies along z, its box numpy's of the array transposed,
+    the surface trimesh reads back that of the transposed array; a
+    ``pitch`` attribute of an entry per stored axis is turned with the
+    axes. Names that are not x, y, z in some order (z, y, x, c) are still
+    read as stored, and said so."""
     zarr = pytest.importorskip("zarr")
-    zyx = np.zeros((4, 6, 10), np.uint8)
-    zyx[1:3, 1:2, 2:9] = 1
-    for name, names in (("zyx.zarr", ["z", "y", "x"]), ("xyz.zarr", ["x", "y", "z"])):
-        array = zarr.create_array(str(tmp_path / name), shape=zyx.shape, chunks=(2, 3, 5), dtype="u1",
-                                  dimension_names=names, fill_value=0)
-        array[:] = zyx
-    named = zarr.open_array(str(tmp_path / "zyx.zarr"), mode="r").metadata.dimension_names
-    for command in (["info", "zyx.zarr", "--json"], ["info", "zyx.zarr", "--labels", "--json"],
-                    ["surface", "zyx.zarr", "-o", "s.ply"], ["info", "xyz.zarr", "--json"]):
-        r = subprocess.run([sys.executable, "-m", "isoflow", *command], capture_output=True, text=True, cwd=tmp_path)
-        assert r.returncode == 0, r.stderr
-        said = [line for line in r.stderr.splitlines() if "dimension_names" in line]
-        if command[1] == "xyz.zarr":
-            assert not said, r.stderr
-            continue
-        assert len(said) == 1 and f"dimension_names are {', '.join(named)}" in said[0], r.stderr
-        assert "z as x, x as z" in said[0] and "mirror image" in said[0]
-        if command[0] == "info" and "--labels" not in command:
-            assert json.loads(r.stdout)["shape"] == list(zyx.shape)  # as stored, as documented
+    pytest.importorskip("dask")
+    from isoflow.flow.chunked import source_volume
+
+    zyx = np.zeros((9, 4, 5), np.uint8)
+    zyx[1:8, 1:3, 2:4] = 1  # a bar along stored axis 0, which the names call z
+    xyz = zyx.T
+    cells = np.argwhere(xyz)
+    box = [*cells.min(0).tolist(), *(cells.max(0) + 1).tolist()]  # voxel corners, as isoflow's bbox
+    assert box[5] - box[2] == 7  # the bar runs along z
+    zarr.create_array(str(tmp_path / "zyx.zarr"), data=zyx, chunks=(4, 3, 2), dimension_names=["z", "y", "x"])
+    np.save(tmp_path / "xyz.npy", xyz)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no word on the axes: they are read as named
+        assert np.array_equal(isoflow.read_volume(tmp_path / "zyx.zarr").volume, xyz)
+        assert np.array_equal(isoflow.read_labels(tmp_path / "zyx.zarr").array, xyz)
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", "zyx.zarr", "--json"], capture_output=True,
+                          text=True, cwd=tmp_path)
+    assert done.returncode == 0 and "dimension_names" not in done.stderr, done.stderr
+    stored = json.loads(done.stdout)  # read block by block
+    assert stored["shape"] == list(xyz.shape) and stored["bbox"] == box
+    stored.pop("input"), stored.pop("dtype")
+    whole = json.loads(run(capsys, "info", tmp_path / "xyz.npy", "--json"))
+    assert stored == {k: v for k, v in whole.items() if k not in ("input", "dtype")}
+    table = json.loads(run(capsys, "info", tmp_path / "zyx.zarr", "--labels", "--json"))  # layers of blocks
+    assert np.array_equal(source_volume(tmp_path / "zyx.zarr")[0].compute(), xyz)  # flow --volumes .zarr's input
+    assert [table["labels"][0][f"bbox-{i}"] for i in range(6)] == box
+    run(capsys, "surface", tmp_path / "zyx.zarr", "-o", tmp_path / "s.ply")  # block by block
+    run(capsys, "surface", tmp_path / "xyz.npy", "-o", tmp_path / "t.ply")
+    got, want = (trimesh.load(tmp_path / name, process=False) for name in ("s.ply", "t.ply"))
+    assert np.allclose(got.bounds, [box[:3], box[3:]]) and np.allclose(want.bounds, got.bounds)
+    assert np.isclose(got.volume, len(cells)) and np.isclose(want.volume, got.volume)
+
+    placed = zarr.create_array(str(tmp_path / "p.zarr"), data=zyx, chunks=(4, 3, 2), dimension_names=list("zyx"))
+    placed.attrs.update(pitch=[2.0, 1.0, 0.5], origin=[30.0, 20.0, 10.0])  # stored order: z first
+    obj = isoflow.read_volume(tmp_path / "p.zarr")
+    assert obj.pitch.tolist() == [0.5, 1.0, 2.0] and obj.origin.tolist() == [10.0, 20.0, 30.0]
+    world = (np.array(box) * ([0.5, 1.0, 2.0] * 2) + [10.0, 20.0, 30.0] * 2).tolist()
+    assert isoflow.analyze_zarr(tmp_path / "p.zarr").bbox == world
+    table = json.loads(run(capsys, "info", tmp_path / "p.zarr", "--labels", "--json"))
+    assert [table["labels"][0][f"bbox-{i}"] for i in range(6)] == world
+
+    zarr.create_array(str(tmp_path / "yx.zarr"), data=zyx[:, 0], chunks=(4, 3), dimension_names=["y", "x"])
+    assert np.array_equal(isoflow.read_volume(tmp_path / "yx.zarr").volume, zyx[:, 0].T)
+    zarr.create_array(str(tmp_path / "c.zarr"), data=zyx[..., None], dimension_names=list("zyxc"))
+    with pytest.warns(isoflow.IsoflowWarning, match="read as stored"):
+        assert np.array_equal(isoflow.read_labels(tmp_path / "c.zarr").array, zyx)
 
 
 def test_a_dataset_an_hdf5_external_link_names_is_read_and_listed(tmp_path):

@@ -677,9 +677,10 @@ def source_volume(path: str | os.PathLike) -> tuple[Any, DigitalObject, Any]:
 
     store = open_store(path)
     lazy = store.lazy()
-    if store.multiscale is not None:  # the kept axes in stored order, turned to x, y, z
-        kept = [i for i in range(store.array.ndim) if i not in store.other]
-        lazy = lazy.transpose([kept.index(i) for i in store.xyz])
+    kept = [i for i in range(store.array.ndim) if i not in store.other]
+    order = [kept.index(i) for i in store.xyz]
+    if order != sorted(order):  # the kept axes in stored order (OME-Zarr's z, y, x), turned to x, y, z
+        lazy = lazy.transpose(order)
     pitch, origin = store.placement()
     if lazy.ndim != 3:
         raise IsoflowError(f"{store.where}: the flow runs block by block on 3D volumes; this one is {lazy.ndim}D "

@@ -745,20 +745,61 @@ def fourth_axis_name(path: str | os.PathLike) -> str | None:
             names = axis_names(multiscale, array.ndim, str(path))
             xyz = spatial_axes(names, array.shape, str(path), time=True)[0]
             return names[xyz[3]] if len(xyz) == 4 else None
-        names = [str(n).lower() for n in getattr(array.metadata, "dimension_names", None) or ()]
+        names = _dimension_names(array)
     except Exception:  # zarr raises many types; the words fall back to "time points or channels"
         return None
     return names[3] if names[:3] == ["x", "y", "z"] and len(names) == 4 else None
 
 
+def _dimension_names(array: Any) -> list[str]:
+    """A zarr v3 array's ``dimension_names``, lower case (a missing one
+    ``'none'``); none for an array without them (zarr v2 has none)."""
+    names = getattr(getattr(array, "metadata", None), "dimension_names", None)
+    return [str(n).lower() for n in names or ()]
+
+
+def named_axes(array: Any) -> list[int] | None:
+    """The stored axes of x, y and z (x and y in 2D) of a plain zarr v3
+    array whose ``dimension_names`` name them, in any order and any case
+    (z, y, x as xarray and tensorstore write them): such an array is read
+    by its names, as an OME-Zarr image is by its axes. None where the
+    names are anything else (none, a channel or time axis among them, a
+    name twice), and the array is read as stored.
+
+    Parameters
+    ----------
+    array : zarr.Array
+        The plain array (no ``multiscales`` above it).
+
+    Returns
+    -------
+    list of int or None
+        For x, y (and z), the index of its stored axis.
+
+    Examples
+    --------
+    >>> import zarr
+    >>> named_axes(zarr.create_array({}, shape=(4, 5, 6), dtype="u1", dimension_names=["Z", "y", "x"]))
+    [2, 1, 0]
+    >>> named_axes(zarr.create_array({}, shape=(4, 5, 6, 1), dtype="u1", dimension_names=list("zyxc"))) is None
+    True
+    """
+    names = _dimension_names(array)
+    spatial = list("xyz"[:array.ndim])
+    if array.ndim not in (2, 3) or sorted(names) != spatial:
+        return None
+    return [names.index(a) for a in spatial]
+
+
 def stored_order_said(array, where: str) -> str | None:
     """Warn where a plain zarr array's ``dimension_names`` (zarr v3) name
-    its spatial axes otherwise than isoflow reads them: a plain array is
-    read as stored, axis 0 as x, 1 as y, 2 as z (docs/formats.md), so an
-    array whose names are z, y, x is read with its z as x, the mirror
-    image of the volume its names describe (coordinates and a surface
-    with x and z swapped; counts and topology are the same). An OME-Zarr
-    image's axes are read by name.
+    spatial axes that isoflow reads as stored, axis 0 as x, 1 as y, 2 as z
+    (docs/formats.md): names that are x, y, z in some order are read by
+    name (:func:`named_axes`), but among others (z, y, x, c) they are not,
+    and an array named so is read with its z as x, the mirror image of the
+    volume its names describe (coordinates and a surface with x and z
+    swapped; counts and topology are the same). An OME-Zarr image's axes
+    are read by name.
 
     Parameters
     ----------
@@ -770,28 +811,29 @@ def stored_order_said(array, where: str) -> str | None:
     Returns
     -------
     str or None
-        The warning given, or None where the names agree (or there are none).
+        The warning given, or None where the names agree, are read by
+        name, or there are none.
 
     Examples
     --------
     >>> import tempfile, zarr
     >>> folder = Path(tempfile.mkdtemp())
-    >>> a = zarr.create_array(str(folder / "a.zarr"), shape=(4, 5, 6), dtype="u1", dimension_names=list("xyz"))
+    >>> a = zarr.create_array(str(folder / "a.zarr"), shape=(4, 5, 6), dtype="u1", dimension_names=list("zyx"))
     >>> stored_order_said(a, "a.zarr") is None
     True
     """
-    try:
-        names = [str(n).lower() for n in getattr(array.metadata, "dimension_names", None) or ()]
-    except AttributeError:  # (zarr v2 arrays have no names)
+    if named_axes(array) is not None:
         return None
+    names = _dimension_names(array)
     spatial = ("x", "y", "z")
     if len(names) != array.ndim or not any(n in spatial and n != a for n, a in zip(names, "xyzt")):
         return None
     read_as = ", ".join(f"{n} as {a}" for n, a in zip(names, "xyzt") if n != a and n in spatial)
-    text = (f"{where}: its dimension_names are {', '.join(names)}, and a plain zarr array is read as stored (axis 0 "
-            f"as x, 1 as y, 2 as z): {read_as}, the mirror image of the volume the names describe (its coordinates "
-            "and surface with those axes swapped; counts and topology unchanged); save it with dimension_names "
-            "x, y, z, or as OME-Zarr, whose axes are read by name")
+    text = (f"{where}: its dimension_names are {', '.join(names)}, and a plain zarr array is read by them only "
+            f"where they are x, y, z in some order; this one is read as stored (axis 0 as x, 1 as y, 2 as z): "
+            f"{read_as}, the mirror image of the volume the names describe (its coordinates and surface with those "
+            "axes swapped; counts and topology unchanged); save it with dimension_names x, y, z, or as OME-Zarr, "
+            "whose axes are read by name")
     warn(text)
     return text
 
@@ -867,7 +909,8 @@ def zarr_volume(path) -> tuple[Any, list[int]]:
     order of its axes as (x, y, z).
 
     ``path`` is ``STORE.zarr`` or ``IMAGE.zarr:LEVEL``; a plain array's axes
-    are (x, y, z) as stored; an OME-Zarr image's axes are named, and those
+    are (x, y, z) as stored, or as its ``dimension_names`` name them
+    (:func:`named_axes`); an OME-Zarr image's axes are named, and those
     of length 1 that are not x, y or z (a channel, a time point) are left
     out of the array returned (:class:`SpatialAxes`).
 
@@ -906,7 +949,7 @@ def zarr_volume(path) -> tuple[Any, list[int]]:
     store, level = (Path(text), None) if Path(text).exists() else split_store(text)
     array, multiscale, _ = open_zarr_node(store, level)
     if multiscale is None:
-        return array, list(range(array.ndim))
+        return array, named_axes(array) or list(range(array.ndim))
     xyz, _ = spatial_axes(axis_names(multiscale, array.ndim, text), array.shape, text)
     if len(xyz) == array.ndim:
         return array, xyz

@@ -15,8 +15,11 @@ corner is the translation less half a voxel, in the length unit of the x,
 y and z ``axes`` entries (NGFF 0.4 on; :func:`axis_unit`). A zarr store without
 ``multiscales`` is read as before: the array at the path, or a group's array
 named ``volume`` or its only array (``STORE.zarr:NAME`` the array of that
-name), axes as stored (axis 0 is x), no
-placement.
+name), axes as its zarr v3 ``dimension_names`` name them where they are x,
+y, z in some order (z, y, x as xarray writes them;
+:func:`~isoflow.scale.chunks.named_axes`), else as stored (axis 0 is x);
+placed by its ``pitch`` and ``origin`` attributes (one entry per stored
+axis) where it has both.
 
 ``isoflow info`` reads a zarr store block by block (:func:`analyze_store`);
 the other commands read the level into memory, refused up front when it
@@ -52,6 +55,7 @@ from ...errors import IsoflowError, check_path, counted, warn
 from ...scale.arrays import NotBinary
 from ...scale.chunks import (
     axis_names,
+    named_axes,
     never_written,
     open_zarr_node,
     spatial_axes,
@@ -157,11 +161,13 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
     where = str(path) if dataset is None else f"{path}:{dataset}"
     array, multiscale, level = open_zarr_node(path, dataset)
     names = None if multiscale is None else axis_names(multiscale, array.ndim, where)
+    # a plain array's x, y, z: by its dimension_names where they name them, else as stored
+    plain = (named_axes(array) or list(range(array.ndim))) if multiscale is None else None
     index: tuple = (Ellipsis,)
     shape = tuple(array.shape)
     at = None
     if time is not None:
-        xyz = list(range(array.ndim)) if names is None else spatial_axes(names, array.shape, where, time=True)[0]
+        xyz = plain if names is None else spatial_axes(names, array.shape, where, time=True)[0]
         time = check_time(time, [array.shape[i] for i in xyz], where)
         # the time axis kept, of length 1, so that the axes stay as stored
         index = tuple(slice(int(time), int(time) + 1) if i == xyz[3] else slice(None) for i in range(array.ndim))
@@ -178,12 +184,14 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
     if multiscale is None:
         stored_order_said(array, where)
         data = data if time is None else data[..., 0]
-        # a plain array: isoflow's slab voxeliser (isoflow.mesh.slabs) keeps
-        # the grid in the attributes ``pitch`` and ``origin`` (x, y, z order)
+        data = np.transpose(data, plain) if data.ndim == len(plain) else data
+        # a plain array may keep its grid in the attributes ``pitch`` and
+        # ``origin``, an entry per stored axis (as isoflow's slab voxeliser
+        # once wrote them), turned to x, y, z as the axes are
         attrs = dict(getattr(array, "attrs", {}) or {})
         if "pitch" in attrs and "origin" in attrs:
             try:
-                pitch, origin = (np.asarray(attrs[k], np.float64) for k in ("pitch", "origin"))
+                pitch, origin = (stored_axes_value(np.asarray(attrs[k], np.float64), plain) for k in ("pitch", "origin"))
             except (TypeError, ValueError):
                 raise IsoflowError(f"{where}: the attributes pitch {attrs['pitch']!r} and origin "
                                    f"{attrs['origin']!r} are not numbers") from None
@@ -299,8 +307,9 @@ class StoreArray:
     """A zarr store's volume array as :func:`open_store` opens it: the
     array, the store as messages name it, the OME-Zarr ``multiscales`` entry
     and level (None for a plain array), and the indices of its x, y and z
-    axes (every axis, in stored order, for a plain array) and of its other
-    axes (each of length 1).
+    axes (a plain array's by its ``dimension_names`` where they name x, y
+    and z, :func:`~isoflow.scale.chunks.named_axes`; else every axis, in
+    stored order) and of its other axes (each of length 1).
 
     Examples
     --------
@@ -352,9 +361,9 @@ class StoreArray:
 
     def _own_axes(self, value: np.ndarray) -> np.ndarray:
         """A plain array's attribute of one entry per stored axis, of the
-        x, y, z axes alone (a channel axis read at 0 has none); one number
-        for every axis, or another count, as it is (checked where used)."""
-        return value[self.xyz] if value.ndim == 1 and len(value) == self.array.ndim else value
+        x, y, z axes alone (a channel axis read at 0 has none)
+        (:func:`stored_axes_value`)."""
+        return stored_axes_value(value, self.xyz, self.array.ndim)
 
     def unit(self) -> str | None:
         """The length unit of the placement (:func:`axis_unit`)."""
@@ -364,6 +373,25 @@ class StoreArray:
     def units(self) -> tuple[np.ndarray, str | None]:
         """:func:`axis_unit` of the store's axes, read (and any warning given) once."""
         return axis_unit(self.multiscale, self.xyz, self.where)
+
+
+def stored_axes_value(value: Any, xyz: list[int], ndim: int | None = None) -> Any:
+    """A plain zarr array's attribute of one entry per stored axis
+    (``pitch``, ``origin``) in isoflow's order: the entries of the axes
+    ``xyz`` (the stored indices of x, y and z, see :class:`StoreArray`); one
+    number for every axis, or another count of entries (``ndim``, the
+    stored axes, by default ``len(xyz)``), as it is (checked where used).
+
+    Examples
+    --------
+    >>> stored_axes_value([2.0, 1.0, 0.5], [2, 1, 0]), stored_axes_value(0.5, [2, 1, 0])
+    ([0.5, 1.0, 2.0], 0.5)
+    >>> stored_axes_value(np.array([2.0, 1.0, 0.5, 1.0]), [0, 1, 2], 4)
+    array([2. , 1. , 0.5])
+    """
+    if np.ndim(value) != 1 or len(value) != (len(xyz) if ndim is None else ndim):
+        return value
+    return value[xyz] if isinstance(value, np.ndarray) else [value[i] for i in xyz]
 
 
 def open_store(path: str | os.PathLike, time: bool = False, channel: bool = False) -> StoreArray:
@@ -419,6 +447,9 @@ def open_store(path: str | os.PathLike, time: bool = False, channel: bool = Fals
     where = str(path)
     array, multiscale, dataset = open_zarr_node(file, level)
     if multiscale is None:
+        named = named_axes(array)  # x, y, z by the array's dimension_names, where they name them
+        if named is not None:
+            return StoreArray(array, where, None, None, named, [])
         stored_order_said(array, where)
         if channel and array.ndim == 4 and array.shape[3] == 1:
             return StoreArray(array, where, None, None, [0, 1, 2], [3])
@@ -451,7 +482,8 @@ def stored_shape(path: str | os.PathLike, channel: bool = False) -> tuple[int, .
     -------
     tuple of int
         (x, y, z) in an OME-Zarr image, (x, y, z, t) for a time series of
-        3D volumes; every axis as stored in a plain array.
+        3D volumes; in a plain array (x, y, z) where its dimension_names
+        name them, else every axis as stored.
 
     Examples
     --------
@@ -892,7 +924,8 @@ class LabelSlabs:
         array, self.where = store.array, store.where
         if store.multiscale is None:
             attrs = dict(getattr(array, "attrs", {}) or {})
-            pitch, origin = attrs.get("pitch", 1.0), attrs.get("origin")
+            pitch, origin = (stored_axes_value(attrs.get(k, v), store.xyz, array.ndim)
+                             for k, v in (("pitch", 1.0), ("origin", None)))
         else:
             pitch, origin = store.placement()
         xyz, other = store.xyz, store.other
