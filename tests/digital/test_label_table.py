@@ -114,17 +114,41 @@ def test_nested_and_wrapped_labels_equal_analyze(rng, conn, method):
 
 
 @needs_numba
-def test_the_vertex_pass_is_compiled_once_for_every_integer_width(rng):
+def test_the_passes_are_compiled_once_for_every_integer_width(rng):
     """Label images come as uint8, int16, uint32, int64, in either byte
-    order: the vertex pass reads the values as bytes, so that one compiled
-    pass serves every width (a compile of its own per width was a first
-    wait per width for the user)."""
+    order: the labelling and the vertex pass read the values as bytes, so
+    that one compiled pass serves every width (a compile of its own per
+    width was a first wait of seconds per width for the user). Two threads,
+    so that the slabs' seams are joined too."""
     from isoflow.scale import pieces
 
     image = rng.choice(5, size=(7, 6, 8), p=[0.4, 0.15, 0.15, 0.15, 0.15])
     for dtype in (np.uint8, np.dtype(">i2"), np.uint32, np.int64):
-        assert_rows_equal_analyze(image.astype(dtype), 26, method="compiled")
-    assert len(pieces._vertex_rows.signatures) == 1, pieces._vertex_rows.signatures
+        assert_rows_equal_analyze(image.astype(dtype), 26, method="compiled", threads=2)
+    for name in ("_vertex_rows", "_slab_runs", "_join_seam", "_number_runs", "_count_roots"):
+        assert len(getattr(pieces, name).signatures) == 1, (name, getattr(pieces, name).signatures)
+    # called from compiled passes only: compiled with them, none loaded from numba's cache
+    for name in ("_change_bits", "_equal_bits", "_join_rows"):
+        assert len(getattr(pieces, name).signatures) <= 1, (name, getattr(pieces, name).signatures)
+
+
+@needs_numba
+def test_labels_that_differ_only_in_a_high_byte_stay_apart(rng):
+    """The labelling compares values byte by byte: labels whose low bytes
+    agree (k << 8 (width - 1)) are cut and joined as their codes k are, on
+    rows long enough for the compares of whole words (70 voxels) and busy
+    enough for the joins from bits. The table of a relabelled image is the
+    table of the codes, relabelled."""
+    codes = rng.integers(0, 4, (5, 6, 70)).astype(np.uint8)
+    codes[:, :3, 30:] = 3  # long runs beside the busy rows
+    want = label_table(codes, 26, method="compiled", threads=2)
+    for dtype in (np.dtype("<u2"), np.dtype(">i4"), np.dtype("<u8")):
+        shift = 8 * (dtype.itemsize - 1) - (dtype.kind == "i")
+        got = label_table(codes.astype(dtype) << shift, 26, method="compiled", threads=2)
+        assert np.array_equal(got["label"], want["label"].astype(np.int64) << shift), dtype
+        for key in want:
+            if key != "label":
+                assert np.array_equal(got[key], want[key], equal_nan=want[key].dtype.kind == "f"), (dtype, key)
 
 
 @needs_numba

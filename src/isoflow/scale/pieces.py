@@ -145,8 +145,19 @@ def unsigned(volume: np.ndarray) -> np.ndarray:
     return v.view(np.dtype(f"u{v.dtype.itemsize}"))
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _read(data, v, w):
+    """Voxel v's value from ``data``, a label image's values as their
+    little-endian bytes, w to a value (:func:`value_bytes`)."""
+    i = v * w
+    out = np.uint64(data[i])
+    for b in range(1, w):
+        out |= np.uint64(data[i + b]) << np.uint64(8 * b)
+    return out
+
+
 @njit(cache=True, nogil=True)
-def _join_rows(flat, nz, starts, parent, a0, a1, row_a, b0, b1, row_b):
+def _join_rows(flat, w, nz, starts, parent, a0, a1, row_a, b0, b1, row_b):
     """Join the runs [a0, a1) of the voxel row at flat index ``row_a`` with
     the runs [b0, b1) of the row at ``row_b`` that they touch by a face and
     share a value with. Both rows cut [0, nz) into runs, so walking them
@@ -154,65 +165,64 @@ def _join_rows(flat, nz, starts, parent, a0, a1, row_a, b0, b1, row_b):
     overlapping pair once. Each run's end is read once, when the walk
     reaches it, and a step where both runs end at once steps both rows:
     fewer loads and branches per step than testing each row's end at every
-    step, the part of the labelling that grows with the runs."""
+    step, the part of the labelling that grows with the runs. ``flat``:
+    the image's values as bytes, w to a value (:func:`_read`)."""
     ia, ib = a0, b0
     ea = starts[ia + 1] if ia + 1 < a1 else nz
     eb = starts[ib + 1] if ib + 1 < b1 else nz
-    va, vb = flat[row_a + starts[ia]], flat[row_b + starts[ib]]
+    va, vb = _read(flat, row_a + starts[ia], w), _read(flat, row_b + starts[ib], w)
     while True:
         if va == vb:
             union(parent, ia, ib)
         if ea < eb:
             ia += 1
-            va = flat[row_a + ea]
+            va = _read(flat, row_a + ea, w)
             ea = starts[ia + 1] if ia + 1 < a1 else nz
         elif eb < ea:
             ib += 1
-            vb = flat[row_b + eb]
+            vb = _read(flat, row_b + eb, w)
             eb = starts[ib + 1] if ib + 1 < b1 else nz
         else:  # both runs end here: at nz, both rows are done
             if ea == nz:
                 return
             ia += 1
             ib += 1
-            va, vb = flat[row_a + ea], flat[row_b + eb]
+            va, vb = _read(flat, row_a + ea, w), _read(flat, row_b + eb, w)
             ea = starts[ia + 1] if ia + 1 < a1 else nz
             eb = starts[ib + 1] if ib + 1 < b1 else nz
 
 
 @njit(cache=True, nogil=True)
-def _change_bits(flat, g0, n, words):
+def _change_bits(flat, w, g0, n, words):
     """Bit p of ``words`` (p < n): whether voxel g0 + p of the flattened
     image differs from the one before it (bit 0: no); the bits from n on
-    clear. The full words compare views indexed from 0, so that they
-    compile to vector compares."""
-    full = n // 64
-    w = np.uint64(0)
+    clear. ``flat``: the image's values as bytes, w to a value
+    (:func:`_read`); past the first word, the bits where they do not
+    equal the ones before them (:func:`_equal_bits`, whose vector compares
+    this shares rather than compiling its own for every width)."""
+    first = np.uint64(0)
     for p in range(1, min(n, 64)):
-        w |= np.uint64(flat[g0 + p] != flat[g0 + p - 1]) << np.uint64(p)
-    words[0] = w
-    for k in range(1, full):
-        after, before = flat[g0 + 64 * k:g0 + 64 * k + 64], flat[g0 + 64 * k - 1:g0 + 64 * k + 63]
-        w = np.uint64(0)
-        for t in range(64):
-            w |= np.uint64(after[t] != before[t]) << np.uint64(t)
-        words[k] = w
-    if full >= 1 and n % 64:
-        w = np.uint64(0)
-        for p in range(64 * full, n):
-            w |= np.uint64(flat[g0 + p] != flat[g0 + p - 1]) << np.uint64(p - 64 * full)
-        words[full] = w
+        first |= np.uint64(_read(flat, g0 + p, w) != _read(flat, g0 + p - 1, w)) << np.uint64(p)
+    if n > 64:
+        rest = words[1:]
+        _equal_bits(flat, w, g0 + 64, g0 + 63, n - 64, rest)
+        used = (n - 64 + 63) // 64
+        for k in range(used):
+            rest[k] = ~rest[k]
+        if n % 64:
+            rest[used - 1] &= (np.uint64(1) << np.uint64(n % 64)) - np.uint64(1)
+    words[0] = first
 
 
 #: voxels whose changes :func:`_slab_runs` marks at once (a few rows)
 MARK_VOXELS = 1 << 13
 
 
-@njit(cache=True, nogil=True)
-def _equal_bits(flat, a, b, n, words):
-    """Bit p of ``words`` (p < n): whether voxels a + p and b + p of the
-    flattened image hold one value; the bits from n on clear. Vector
-    compares, as :func:`_change_bits`."""
+@njit(cache=True, nogil=True, inline="always")
+def _equals(flat, a, b, n, words):
+    """:func:`_equal_bits` of the values as integers of their width. The
+    full words compare views indexed from 0, so that they compile to
+    vector compares."""
     full = n // 64
     for k in range(full):
         x, y = flat[a + 64 * k:a + 64 * k + 64], flat[b + 64 * k:b + 64 * k + 64]
@@ -225,6 +235,25 @@ def _equal_bits(flat, a, b, n, words):
         for p in range(64 * full, n):
             w |= np.uint64(flat[a + p] == flat[b + p]) << np.uint64(p - 64 * full)
         words[full] = w
+
+
+@njit(cache=True, nogil=True)
+def _equal_bits(flat, w, a, b, n, words):
+    """Bit p of ``words`` (p < n): whether voxels a + p and b + p of the
+    flattened image hold one value; the bits from n on clear. ``flat``: the
+    image's values as bytes, w to a value (:func:`_read`), so that one
+    compiled pass serves every width; they are compared as integers of
+    their width, a vector compare per width in this one small function
+    (bytes compared one by one, then gathered into a bit per value, took
+    four times as long)."""
+    if w == 1:
+        _equals(flat, a, b, n, words)
+    elif w == 2:
+        _equals(flat.view(np.uint16), a, b, n, words)
+    elif w == 4:
+        _equals(flat.view(np.uint32), a, b, n, words)
+    else:
+        _equals(flat.view(np.uint64), a, b, n, words)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -275,20 +304,20 @@ def _row_bits(words, at, nz, out):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _join_pair(flat, nz, starts, parent, first, used, row, b0, b1, row_b, busy, row_bits, layer, yb, equal):
+def _join_pair(flat, w, nz, starts, parent, first, used, row, b0, b1, row_b, busy, row_bits, layer, yb, equal):
     """Join the runs [first, used) of the row at flat index ``row`` with
     the runs [b0, b1) of the row at ``row_b``: from bits where both rows
     are busy (``row_bits`` and ``layer[yb]``: where each begins runs), else
     by a walk along their runs."""
     if busy and (b1 - b0) * BITS_VOXELS_PER_RUN > nz:
-        _equal_bits(flat, row, row_b, nz, equal)
+        _equal_bits(flat, w, row, row_b, nz, equal)
         _join_bits(row_bits, layer, yb, equal, first, b0, parent)
     else:
-        _join_rows(flat, nz, starts, parent, first, used, row, b0, b1, row_b)
+        _join_rows(flat, w, nz, starts, parent, first, used, row, b0, b1, row_b)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _join_row(flat, ny, nz, x_lo, r, first, used, offsets, starts, parent, words, at, layer, row_bits, equal):
+def _join_row(flat, w, ny, nz, x_lo, r, first, used, offsets, starts, parent, words, at, layer, row_bits, equal):
     """Join the runs [first, used) of row r = x * ny + y with those of rows
     (x, y - 1) and (x - 1, y) (within the slab). ``words`` holds where row
     r begins runs from bit ``at`` on; ``layer[y]`` holds where the busy
@@ -301,10 +330,10 @@ def _join_row(flat, ny, nz, x_lo, r, first, used, offsets, starts, parent, words
     if busy:
         _row_bits(words, at, nz, row_bits)
     if y > 0:
-        _join_pair(flat, nz, starts, parent, first, used, row, offsets[r - 1], first, row - nz, busy, row_bits,
+        _join_pair(flat, w, nz, starts, parent, first, used, row, offsets[r - 1], first, row - nz, busy, row_bits,
                    layer, y - 1, equal)
     if x > x_lo:
-        _join_pair(flat, nz, starts, parent, first, used, row, offsets[r - ny], offsets[r - ny + 1], row - ny * nz,
+        _join_pair(flat, w, nz, starts, parent, first, used, row, offsets[r - ny], offsets[r - ny + 1], row - ny * nz,
                    busy, row_bits, layer, y, equal)
     if busy:
         for k in range(len(row_bits)):
@@ -312,7 +341,7 @@ def _join_row(flat, ny, nz, x_lo, r, first, used, offsets, starts, parent, words
 
 
 @njit(cache=True, nogil=True, _nrt=False)
-def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, used, words, layer, row_bits,
+def _slab_runs(flat, w, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, used, words, layer, row_bits,
                equal):
     """The runs of the voxel rows (x, y), x_lo <= x < x_hi, from (x_at,
     y_at) on, appended at ``used`` with slab-local indices: ``starts`` (z of
@@ -341,7 +370,7 @@ def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, us
         b = min(batch, r_end - r)
         if used + b * nz > len(starts):
             return used, r // ny, r % ny
-        _change_bits(flat, r * nz, b * nz, words)
+        _change_bits(flat, w, r * nz, b * nz, words)
         for t in range(b):
             words[(t * nz) >> 6] |= np.uint64(1) << np.uint64((t * nz) & 63)
         # the set bits in order; each row's first is its start
@@ -349,13 +378,13 @@ def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, us
         rr = r - 1
         first = used
         for k in range((b * nz + 63) // 64):
-            w = words[k]
-            while w != 0:
-                g = k * 64 + np.int64(trailing_zeros(w))
-                w &= w - np.uint64(1)
+            bits = words[k]
+            while bits != 0:
+                g = k * 64 + np.int64(trailing_zeros(bits))
+                bits &= bits - np.uint64(1)
                 if g == row_end:  # the next row begins: the last one is complete
                     if rr >= r:
-                        _join_row(flat, ny, nz, x_lo, rr, first, used, offsets, starts, parent, words,
+                        _join_row(flat, w, ny, nz, x_lo, rr, first, used, offsets, starts, parent, words,
                                   (rr - r) * nz, layer, row_bits, equal)
                     rr += 1
                     row_end += nz
@@ -364,19 +393,19 @@ def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, us
                 starts[used] = g - (row_end - nz)
                 parent[used] = used
                 used += 1
-        _join_row(flat, ny, nz, x_lo, rr, first, used, offsets, starts, parent, words, (rr - r) * nz, layer,
+        _join_row(flat, w, ny, nz, x_lo, rr, first, used, offsets, starts, parent, words, (rr - r) * nz, layer,
                   row_bits, equal)
         r += b
     return used, x_hi, 0
 
 
 @njit(cache=True, nogil=True)
-def _join_seam(flat, ny, nz, x, offsets, starts, parent):
+def _join_seam(flat, w, ny, nz, x, offsets, starts, parent):
     """Join the runs of voxel layer x with those of layer x - 1 (two slabs'
     runs, numbered globally)."""
     for y in range(ny):
         r = x * ny + y
-        _join_rows(flat, nz, starts, parent, offsets[r], offsets[r + 1], r * nz, offsets[r - ny],
+        _join_rows(flat, w, nz, starts, parent, offsets[r], offsets[r + 1], r * nz, offsets[r - ny],
                    offsets[r - ny + 1], (r - ny) * nz)
 
 
@@ -390,7 +419,7 @@ def _count_roots(parent):
 
 
 @njit(cache=True, nogil=True)
-def _number_runs(flat, offsets, starts, parent, nz, values):
+def _number_runs(flat, w, offsets, starts, parent, nz, values):
     """In C order, roots get the piece numbers 1..n and every other run its
     parent's number (the parent precedes it, so it has its number already):
     ``parent`` becomes each run's piece, ``values`` each piece's value."""
@@ -401,7 +430,7 @@ def _number_runs(flat, offsets, starts, parent, nz, values):
             if p == k:
                 n += 1
                 parent[k] = n
-                values[n] = flat[r * nz + starts[k]]
+                values[n] = _read(flat, r * nz + starts[k], w)
             else:
                 parent[k] = parent[p]
     return n
@@ -505,10 +534,11 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     nx, ny, nz = flat_vol.shape
     if flat_vol.size > MAX_PIECE_VOXELS:
         raise ValueError(f"label_pieces numbers at most {MAX_PIECE_VOXELS} voxels at once (use slabs)")
-    flat = flat_vol.reshape(-1)
+    # the values as bytes: one compiled labelling for every integer width
+    flat, w = value_bytes(flat_vol.reshape(-1)).reshape(-1), flat_vol.dtype.itemsize
     offsets = np.zeros(nx * ny + 1, np.int64)
-    parts = slabs(nx, thread_count(flat.size)) if flat.size else []
-    found = run([(_slab_pieces, flat, ny, nz, lo, hi, offsets, axis) for lo, hi in parts])
+    parts = slabs(nx, thread_count(flat_vol.size)) if flat_vol.size else []
+    found = run([(_slab_pieces, flat, w, ny, nz, lo, hi, offsets, axis) for lo, hi in parts])
     at = np.cumsum([0] + [used for _, _, used in found]).tolist()
     total = at[-1]
     if found:  # the first slab's buffers become the whole's, in place (its runs are numbered from 0 already)
@@ -531,20 +561,20 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     del calls
     offsets[-1] = total
     for lo, _ in parts[1:]:
-        _join_seam(flat, ny, nz, lo, offsets, starts, parent)
+        _join_seam(flat, w, ny, nz, lo, offsets, starts, parent)
     n = int(_count_roots(parent))
     check_layers(PIECE_BYTES * (n + 1), f"the statistics of {n:,} pieces of a label image", nx,
                  note="a label image of noise has a piece for about every other voxel",
                  whole=(PIECE_BYTES + FEATURE_BYTES) * (n + 1), axis=axis)
     values = np.zeros(n + 1, np.uint64)
-    _number_runs(flat, offsets, starts, parent, nz, values)
+    _number_runs(flat, w, offsets, starts, parent, nz, values)
     counts, sums, lo, hi = piece_stats(offsets, starts, parent, (nx, ny, nz), n, (first, nx if last is None else last),
                                        x0, parts)
     return {"offsets": offsets, "starts": starts, "runs": parent, "n": n, "values": values, "counts": counts,
             "sums": sums, "lo": lo, "hi": hi}
 
 
-def _slab_pieces(flat: np.ndarray, ny: int, nz: int, x_lo: int, x_hi: int, offsets: np.ndarray,
+def _slab_pieces(flat: np.ndarray, w: int, ny: int, nz: int, x_lo: int, x_hi: int, offsets: np.ndarray,
                  axis: str = "its first axis") -> tuple[Growable, Growable, int]:
     """The runs of one slab of layers, joined within it (slab-local
     indices), in buffers that grow as they fill: ``(starts, parent,
@@ -557,7 +587,7 @@ def _slab_pieces(flat: np.ndarray, ny: int, nz: int, x_lo: int, x_hi: int, offse
     used, x, y = 0, x_lo, 0
     while True:
         starts, parent = (buffer.array() for buffer in buffers)
-        used, x, y = _slab_runs(flat, ny, nz, x_lo, x_hi, x, y, offsets, starts, parent, used, words, layer,
+        used, x, y = _slab_runs(flat, w, ny, nz, x_lo, x_hi, x, y, offsets, starts, parent, used, words, layer,
                                 row_bits, equal)
         del starts, parent  # no array of the buffers held: they grow in place
         if x == x_hi:
