@@ -14,8 +14,6 @@ The input files are written by their own libraries (pynrrd, nibabel).
 
 from __future__ import annotations
 
-import contextlib
-import io
 import re
 import subprocess
 import sys
@@ -23,8 +21,8 @@ import sys
 import numpy as np
 import pytest
 import trimesh
+from in_process import isoflow_here
 
-from isoflow.cli import main
 from isoflow.scale.compiled import COMPILE_NOTE
 
 #: a torus of voxels: a 4^3 block less a 2x2 hole through it
@@ -37,15 +35,6 @@ def isoflow(*args) -> subprocess.CompletedProcess:
     """The command as a user runs it."""
     return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True)
 
-
-def isoflow_here(*args) -> subprocess.CompletedProcess:
-    """The command run in this process, for the runs beside the one whose
-    line is tested (a file at the origin to compare with, a read-back): a
-    process of its own adds nothing to what is tested."""
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([*map(str, args)])
-    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def nrrd_at(path, origin, pitch: float) -> None:

@@ -12,6 +12,7 @@ import warnings
 import numpy as np
 import pytest
 import trimesh
+from in_process import isoflow_here
 from test_input_errors import fails  # one line on stderr, exit 2
 
 import isoflow
@@ -133,18 +134,15 @@ def test_a_negative_pixdim_of_a_nifti_without_forms_mirrors_its_axis(tmp_path, l
     path = tmp_path / "bare.nii"
     stored = bare_nifti(path, labels, pixdim)
     img = nib.load(path)
-    r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--label", "3", "--json"],
-                       capture_output=True, text=True)
+    r = isoflow_here("info", str(path), "--label", "3", "--json")
     assert r.returncode == 0, r.stderr
     report = json.loads(r.stdout)
     assert report["pitch"] == [float(z) for z in img.header.get_zooms()] == [abs(p) for p in pixdim]
     warned = r.stderr
-    r = subprocess.run([sys.executable, "-m", "isoflow", "surface", str(path), "--label", "3", "-o",
-                        str(tmp_path / "s.ply")], capture_output=True, text=True)
+    r = isoflow_here("surface", str(path), "--label", "3", "-o", str(tmp_path / "s.ply"))
     assert r.returncode == 0, r.stderr
     np.save(tmp_path / "label3.npy", labels == 3)
-    r = subprocess.run([sys.executable, "-m", "isoflow", "surface", str(tmp_path / "label3.npy"), "-o",
-                        str(tmp_path / "n.ply")], capture_output=True, text=True)
+    r = isoflow_here("surface", str(tmp_path / "label3.npy"), "-o", str(tmp_path / "n.ply"))
     assert r.returncode == 0, r.stderr
     corners = ply_vertices(tmp_path / "n.ply") - 0.5  # voxel-corner index units: centres' indices - 0.5
     same_points(ply_vertices(tmp_path / "s.ply"), corners * stored)
@@ -175,7 +173,7 @@ def test_a_nifti_mask_is_read_with_its_header_scaling_said_where_it_moves_0(tmp_
     struct.pack_into("<2f", header, 112, slope, inter)  # scl_slope, scl_inter as a writer leaves them
     path.write_bytes(bytes(header))
     values = np.asanyarray(nib.load(path).dataobj)
-    r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--json"], capture_output=True, text=True)
+    r = isoflow_here("info", str(path), "--json")
     said = [line for line in r.stderr.splitlines() if "scl_inter" in line and "warning:" in line]
     if inter == 0 or not slope or np.isnan(slope):  # no scaling of the stored 0: nothing to say
         assert r.returncode == 0 and not said, r.stderr
@@ -206,12 +204,10 @@ def test_nifti_labels_made_fractions_by_scl_slope_are_refused_naming_it(tmp_path
         nib.save(img, tmp_path / f"seg{slope}.nii")
     read = np.asanyarray(nib.load(tmp_path / "seg0.5.nii").dataobj)
     assert sorted(np.unique(read).tolist()) == [0, 0.5, 1.5]
-    r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "seg0.5.nii"), "--labels"],
-                       capture_output=True, text=True)
+    r = isoflow_here("info", str(tmp_path / "seg0.5.nii"), "--labels")
     assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
     assert "holds 0.5: not a whole number" in r.stderr and "scl_slope 0.5 and scl_inter 0" in r.stderr, r.stderr
-    r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "seg2.0.nii"), "--labels", "--json"],
-                       capture_output=True, text=True)
+    r = isoflow_here("info", str(tmp_path / "seg2.0.nii"), "--labels", "--json")
     assert r.returncode == 0, r.stderr
     scaled = np.asanyarray(nib.load(tmp_path / "seg2.0.nii").dataobj)
     assert [row["label"] for row in json.loads(r.stdout)["labels"]] == [2, 6] == sorted(np.unique(scaled)[1:].tolist())
@@ -250,8 +246,7 @@ def test_a_nifti_sform_of_zeros_is_named_and_its_qform_read(tmp_path, qform_code
     img.header.set_sform(np.zeros((4, 4)), code=1)
     nib.save(img, tmp_path / "zs.nii")
     assert not nib.load(tmp_path / "zs.nii").affine[:3, :3].any()  # nibabel's own map: every voxel at one point
-    r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "zs.nii"), "--json"],
-                       capture_output=True, text=True)
+    r = isoflow_here("info", str(tmp_path / "zs.nii"), "--json")
     assert r.stderr.count("\n") == 1 and "sform_code 1, srow_x [0.0, 0.0, 0.0, 0.0]" in r.stderr, r.stderr
     if qform_code == 0:
         assert r.returncode == 2 and "qform_code is 0" in r.stderr, r.stderr
@@ -281,8 +276,7 @@ def test_a_2d_slice_off_the_world_xy_plane_says_which_world_axes_it_runs_along(t
     nrrd.write(str(tmp_path / "axial.nrrd"), mask, dict(space, **{"space directions": [[0.5, 0, 0], [0, 0.7, 0]]}))
     for name, words in (("sagittal.nii.gz", (f"world's {plane} plane", "y-z", "world x = 5 is not kept")),
                         ("coronal.nrrd", ("world's x-z plane", "world y = 2 is not kept")), ("axial.nrrd", None)):
-        r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / name), "--json"],
-                           capture_output=True, text=True)
+        r = isoflow_here("info", str(tmp_path / name), "--json")
         assert r.returncode == 0, r.stderr
         assert json.loads(r.stdout)["voxels"] == np.count_nonzero(mask)
         said = [line for line in r.stderr.splitlines() if "plane" in line]
@@ -587,7 +581,7 @@ def resaved_as_the_refusal_says(path, channels: int) -> dict:
     as the user runs it, beside ``path`` (the one file it writes)."""
     import shlex
 
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path)], capture_output=True, text=True)
+    done = isoflow_here("info", str(path))
     assert done.returncode == 2 and done.stdout == ""
     line, = done.stderr.splitlines()
     assert f"{path.name}: axis 'c' has {channels} entries" in line and "Traceback" not in line
@@ -682,8 +676,7 @@ def test_an_ome_tiff_resaved_as_ome_tiff_keeps_its_stage_position(tmp_path, rng,
     assert {resaved[f"PhysicalSize{axis}Unit"] for axis in "XYZ"} == {"\u00b5m"}
     np.testing.assert_allclose(first_centre(resaved), first_centre(original))
     np.testing.assert_array_equal(tifffile.imread(copy).reshape(mask.shape), mask)
-    p = subprocess.run([sys.executable, "-m", "isoflow", "surface", str(copy), "-o", str(tmp_path / "s.ply")],
-                       capture_output=True, text=True)
+    p = isoflow_here("surface", str(copy), "-o", str(tmp_path / "s.ply"))
     assert p.returncode == 0, p.stderr
     z, y, x = np.nonzero(mask)
     voxels = np.stack([x, y, z], axis=1)
@@ -721,8 +714,7 @@ def test_an_ome_tiff_stage_position_in_mm_without_a_voxel_size_is_not_mixed_with
         with tifffile.TiffFile(tmp_path / name) as tif:
             pixels = tifffile.xml2dict(tif.ome_metadata)["OME"]["Image"]["Pixels"]
         assert not any(key.startswith("PhysicalSize") for key in pixels)
-        done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / name), "--json"],
-                              capture_output=True, text=True)
+        done = isoflow_here("info", str(tmp_path / name), "--json")
         assert done.returncode == 0, done.stderr
         report = json.loads(done.stdout)
         assert report["pitch"] == [1.0, 1.0, 1.0] and report["unit"] is None
@@ -784,8 +776,7 @@ def test_info_of_rgb_planes_saved_by_tifffile_reports_the_array_tifffile_reads(t
         tifffile.imwrite(tmp_path / "t.tif", stack)
     read = tifffile.imread(tmp_path / "t.tif")
     for quiet in ([], ["--quiet"]):
-        done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "t.tif"), "--json", *quiet],
-                              capture_output=True, text=True)
+        done = isoflow_here("info", str(tmp_path / "t.tif"), "--json", *quiet)
         assert done.returncode == 0, done.stderr
         line, = done.stderr.splitlines()
         assert line.startswith(f"isoflow info: warning: {tmp_path / 't.tif'}: ")
@@ -821,8 +812,7 @@ def test_a_time_series_of_3d_volumes_is_read_as_4d(tmp_path):
     """ndim.md says info takes time series of 3D segmentations, but an
     OME-TIFF, an ImageJ hyperstack and an OME-Zarr image with a time axis
     were refused ("axis 't' has 3 entries"): each is now read as (x, y, z,
-    t), the same report as the .npy of that array, in a subprocess as the
-    user runs it; the surface command still refuses 4D, and a series of 2D
+    t), the same report as the .npy of that array; the surface command still refuses 4D, and a series of 2D
     images is still refused, saying which series are read."""
     data = moving_ball()
     tifffile.imwrite(tmp_path / "ts.ome.tif", data, ome=True,
@@ -831,8 +821,7 @@ def test_a_time_series_of_3d_volumes_is_read_as_4d(tmp_path):
     time_series_store(tmp_path / "ts.ome.zarr")
 
     def report(name):
-        p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / name), "--json"],
-                           capture_output=True, text=True)
+        p = isoflow_here("info", str(tmp_path / name), "--json")
         assert p.returncode == 0, p.stderr
         # the topology; the calibration differs by format (tests/test_units_cli.py)
         return {k: v for k, v in json.loads(p.stdout).items() if k not in ("input", "dtype", "pitch", "origin", "unit")}
@@ -848,12 +837,10 @@ def test_a_time_series_of_3d_volumes_is_read_as_4d(tmp_path):
         assert np.array_equal(back.volume, np.transpose(data, (3, 2, 1, 0)).astype(bool))
         expected = [0.5, 0.5, 2.0, 1.0] if name != "ts_imagej.tif" else [1.0, 1.0, 2.0, 1.0]
         assert back.spacing.tolist() == expected, name  # time: step 1, as a 4D NIfTI's
-    p = subprocess.run([sys.executable, "-m", "isoflow", "surface", str(tmp_path / "ts.ome.tif"), "-o",
-                        str(tmp_path / "s.ply")], capture_output=True, text=True)
+    p = isoflow_here("surface", str(tmp_path / "ts.ome.tif"), "-o", str(tmp_path / "s.ply"))
     assert p.returncode == 2 and "surface needs a 3D object, this one is 4D" in p.stderr
     tifffile.imwrite(tmp_path / "tyx.ome.tif", data[:, 2], ome=True, metadata={"axes": "TYX"})
-    p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "tyx.ome.tif")],
-                       capture_output=True, text=True)
+    p = isoflow_here("info", str(tmp_path / "tyx.ome.tif"))
     assert p.returncode == 2 and "save one time point (a time series is read as 4D only of 3D volumes)" in p.stderr
 
 
@@ -1488,8 +1475,7 @@ def test_what_the_readers_take_for_a_mask_is_written_as_one_and_read_so_block_by
         assert np.array_equal(np.asarray(nib.load(tmp_path / f"{name}.nii.gz").dataobj), mask), name
     zarr.create_array(str(tmp_path / "half.zarr"), data=mask * np.float32(0.5), chunks=(4, 4, 4))
     for source in ("half.npy", "half.zarr"):  # read whole, and block by block
-        done = subprocess.run([sys.executable, "-m", "isoflow", "info", tmp_path / source, "--json"],
-                              capture_output=True, text=True)
+        done = isoflow_here("info", tmp_path / source, "--json")
         assert done.returncode == 0, done.stderr
         report = json.loads(done.stdout)
         assert report["voxels"] == np.count_nonzero(mask), source
@@ -1530,7 +1516,7 @@ def test_an_ilastik_export_is_read_by_its_axistags(tmp_path):
         f.create_dataset("exported_data", data=data).attrs["axistags"] = vigra_axistags("zyxc")
 
     def isoflow_cli(*args):
-        return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True)
+        return isoflow_here(*map(str, args))
 
     done = isoflow_cli("info", tmp_path / "seg.h5", "--label", "2", "--json")
     assert done.returncode == 0, done.stderr
@@ -1574,8 +1560,7 @@ def test_an_ilastik_export_is_placed_by_its_axistags_not_mirrored(tmp_path, size
     low, high = cells.min(0) * size, (cells.max(0) + 1) * size
 
     def isoflow_cli(*args):
-        return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True,
-                              cwd=tmp_path)
+        return isoflow_here(*map(str, args), cwd=tmp_path)
 
     done = isoflow_cli("info", "bar.h5", "--json")
     assert done.returncode == 0, done.stderr
@@ -1616,8 +1601,7 @@ def test_a_plain_zarr_array_named_z_y_x_is_read_by_its_names(tmp_path, capsys):
         warnings.simplefilter("error")  # no word on the axes: they are read as named
         assert np.array_equal(isoflow.read_volume(tmp_path / "zyx.zarr").volume, xyz)
         assert np.array_equal(isoflow.read_labels(tmp_path / "zyx.zarr").array, xyz)
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", "zyx.zarr", "--json"], capture_output=True,
-                          text=True, cwd=tmp_path)
+    done = isoflow_here("info", "zyx.zarr", "--json", cwd=tmp_path)
     assert done.returncode == 0 and "dimension_names" not in done.stderr, done.stderr
     stored = json.loads(done.stdout)  # read block by block
     assert stored["shape"] == list(xyz.shape) and stored["bbox"] == box
@@ -1673,8 +1657,7 @@ def test_a_dataset_an_hdf5_external_link_names_is_read_and_listed(tmp_path):
         voxels = int(np.count_nonzero(f["v"][()]))
 
     def isoflow_cli(*args):
-        return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True,
-                              cwd=tmp_path)
+        return isoflow_here(*map(str, args), cwd=tmp_path)
 
     done = isoflow_cli("info", "links.h5", "--json")
     assert done.returncode == 0, done.stderr
@@ -1934,8 +1917,8 @@ def test_magicavoxel_states_its_limit_and_each_caller_its_remedy(tmp_path):
     trimesh.creation.box((1, 1, 1)).export(a)
     trimesh.creation.box((1, 1, 1)).apply_translation((2, 0, 0)).export(b)
     for meshes in ([a], [a, b]):
-        p = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", *map(str, meshes), "--resolution", "300",
-                            "-o", str(tmp_path / "big.vox")], capture_output=True, text=True)
+        p = isoflow_here("voxelize", *map(str, meshes), "--resolution", "300",
+                            "-o", str(tmp_path / "big.vox"))
         assert p.returncode == 2 and not (tmp_path / "big.vox").exists()
         assert p.stderr.strip().splitlines()[-1].endswith(
             "MagicaVoxel models are at most 256 voxels a side, this object is "
@@ -2004,8 +1987,7 @@ def test_a_miniswhite_tiff_is_read_as_stored_with_a_warning_that_names_it(tmp_pa
         stored = tif.asarray() != 0
 
     def report(*extra):
-        p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--json", *extra],
-                           capture_output=True, text=True)
+        p = isoflow_here("info", str(path), "--json", *extra)
         assert p.returncode == 0, p.stderr
         return json.loads(p.stdout), p.stderr.strip().splitlines()
 
@@ -2046,8 +2028,7 @@ def test_an_ome_tiff_is_placed_by_its_first_planes_stage_position_in_its_voxel_s
                                                      "Plane": planes})
     xml = tifffile.TiffFile(path).ome_metadata
     assert 'PositionX="1.5" PositionXUnit="mm"' in xml and 'PhysicalSizeZUnit="nm"' in xml
-    p = subprocess.run([sys.executable, "-m", "isoflow", "surface", str(path), "-o", str(tmp_path / "s.ply")],
-                       capture_output=True, text=True)
+    p = isoflow_here("surface", str(path), "-o", str(tmp_path / "s.ply"))
     assert p.returncode == 0, p.stderr
     vertices = ply_vertices(tmp_path / "s.ply")
     lowest = np.array([1, 2, 1])  # the box's lowest voxel (x, y, z)
@@ -2214,8 +2195,7 @@ def test_the_command_that_saves_an_ome_tiffs_channels_as_slices_names_a_clean_om
     rng = np.random.default_rng(9)
     data = (rng.random((1, 3, 6, 7)) < 0.5).astype(np.uint8)
     tifffile.imwrite(tmp_path / "c.ome.tif", data, metadata={"axes": "ZCYX", "PhysicalSizeX": 0.5})
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", "c.ome.tif"], capture_output=True, text=True,
-                          cwd=tmp_path)
+    done = isoflow_here("info", "c.ome.tif", cwd=tmp_path)
     assert done.returncode == 2
     command = shlex.split(done.stderr.split("save them as one stack and give that: ", 1)[1])
     assert 'tifffile.imwrite("c_stack.ome.tif", tifffile.imread("c.ome.tif"), ome=True' in command[2]
@@ -2290,8 +2270,8 @@ def test_dropped_placement_warnings_write_numbers_as_the_npy_one_does(tmp_path):
 
     def warning(name, suffix):
         out = f"out_{suffix[1:]}_{name[:3]}"
-        p = subprocess.run([sys.executable, "-m", "isoflow", "flow", name, "--steps", "1", "--out", out,
-                            "--volumes", suffix], capture_output=True, text=True, cwd=tmp_path)
+        p = isoflow_here("flow", name, "--steps", "1", "--out", out,
+                            "--volumes", suffix, cwd=tmp_path)
         assert p.returncode == 0, p.stderr
         return next(line for line in p.stderr.splitlines() if "warning" in line and "step_000" in line)
 
@@ -2326,8 +2306,7 @@ def test_a_4d_nifti_and_an_ngff_axis_typed_time_are_called_time_series(tmp_path)
                                "datasets": [{"path": "0", "coordinateTransformations": [
                                    {"type": "scale", "scale": [1.0, 1.0, 1.0, 1.0]}]}]}]
     for name in ("bold.nii.gz", "time.ome.zarr"):
-        p = subprocess.run([sys.executable, "-m", "isoflow", "surface", name, "-o", "s.ply"],
-                           capture_output=True, text=True, cwd=tmp_path)
+        p = isoflow_here("surface", name, "-o", "s.ply", cwd=tmp_path)
         assert p.returncode == 2 and p.stderr.count("\n") == 1 and "Traceback" not in p.stderr, p.stderr
         assert "this one is 4D, shape 8x7x6x3 (a time series of 3 time points along its 4th axis" in p.stderr, p.stderr
         assert "channel" not in p.stderr and "save one time point as 3D" in p.stderr, p.stderr
@@ -2337,8 +2316,7 @@ def test_a_4d_nifti_and_an_ngff_axis_typed_time_are_called_time_series(tmp_path)
             assert np.array_equal(saved[saved.files[0]] > 0, stored[..., 0] > 0)
         (tmp_path / "t0.npz").unlink()
     # info analyses a time series as 4D: the store is read, not refused
-    p = subprocess.run([sys.executable, "-m", "isoflow", "info", "time.ome.zarr"], capture_output=True, text=True,
-                       cwd=tmp_path)
+    p = isoflow_here("info", "time.ome.zarr", cwd=tmp_path)
     assert p.returncode == 0 and "4D, shape 8x7x6x3" in p.stdout, p.stderr
 
 

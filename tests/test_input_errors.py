@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from in_process import isoflow_here
 
 import isoflow
 from isoflow.cli import main
@@ -189,14 +190,12 @@ def test_a_coordinate_with_more_digits_than_float64_holds_is_refused_as_written(
     assert float(written) == round(float(written)) and Fraction(written).denominator != 1
     bad = tmp_path / "bad.txt"
     bad.write_text(separator.join(["0", "0", "0"]) + "\n" + separator.join([written, "0", "0"]) + "\n")
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", bad, "--points-are", "voxels"],
-                          capture_output=True, text=True)
+    done = isoflow_here("info", bad, "--points-are", "voxels")
     assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
     assert done.stderr.strip() == f"isoflow info: error: {bad}:2: coordinate {written} is not an integer"
     good = tmp_path / "good.txt"
     good.write_text(separator.join(["0", "0", "0"]) + "\n" + separator.join(["1.5e1", "2.000", "1E+1"]) + "\n")
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", good, "--points-are", "voxels", "--json"],
-                          capture_output=True, text=True)
+    done = isoflow_here("info", good, "--points-are", "voxels", "--json")
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["shape"] == [16, 3, 11]  # points (0, 0, 0) and (15, 2, 10)
 
@@ -245,8 +244,8 @@ def test_point_list_written_with_its_index_column_reads_its_points(tmp_path, fir
     assert read_points(tmp_path / "spaced.csv").tolist() == points.tolist()
     (tmp_path / "plane.csv").write_text(f"{first},x,y\n" + "".join(f"{i},{a},{b}\n" for i, (a, b, _) in enumerate(points)))
     assert read_points(tmp_path / "plane.csv").tolist() == points[:, :2].tolist()
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "points.csv"), "--points-are", "voxels",
-                           "--json"], capture_output=True, text=True)
+    done = isoflow_here("info", str(tmp_path / "points.csv"), "--points-are", "voxels",
+                           "--json")
     assert done.returncode == 0, done.stderr
     report = json.loads(done.stdout)
     assert report["voxels"] == len(np.unique(points, axis=0)) and report["dimension"] == 3
@@ -1145,8 +1144,6 @@ def test_a_zipped_zarr_store_is_said_to_be_one(command, tmp_path, capsys):
     as a zip of meshes: "no triangles read (empty mesh, or not a valid ZIP
     file)". It is now one line naming the archive and the command that
     unzips it, whose directory then gives the report of the volume."""
-    import subprocess
-    import sys
 
     zarr = pytest.importorskip("zarr")
     v = np.zeros((9, 8, 7), np.uint8)
@@ -1244,7 +1241,7 @@ def test_a_faceless_file_is_read_once_for_its_refusal(tmp_path, monkeypatch, suf
             if edges else f"{path}: no triangles read: it holds 3 points and no faces, a point cloud, not a surface")
     assert str(caught.value).startswith(want), caught.value
     monkeypatch.undo()
-    done = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(path)], capture_output=True, text=True)
+    done = isoflow_here("genus", str(path))
     assert done.returncode == 2 and done.stderr.strip() == f"isoflow genus: error: {caught.value}", done.stderr
 
 
@@ -1391,7 +1388,7 @@ def test_a_valid_archive_without_a_mesh_says_what_it_holds(tmp_path, members, wo
             z.writestr(name, inner.read_bytes() if text is None else text)
     with zipfile.ZipFile(path) as z:
         assert z.testzip() is None  # Python's zipfile reads it whole: a valid ZIP file
-    r = subprocess.run([sys.executable, "-m", "isoflow", command, str(path)], capture_output=True, text=True)
+    r = isoflow_here(command, str(path))
     assert r.returncode == 2 and r.stdout == ""
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in r.stderr, r.stderr

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from in_process import isoflow_here
 from test_input_errors import fails  # one line on stderr, exit 2
 
 from isoflow import analyze, label_table
@@ -1256,8 +1257,7 @@ def test_write_labels_writes_a_2d_label_image_that_info_labels_reads(tmp_path):
     np.save(tmp_path / "cells.npy", cells)
     p = subprocess.run([sys.executable, "-c", code, str(tmp_path / "cells.npy"), str(out)], capture_output=True, text=True)
     assert p.returncode == 0, p.stderr
-    p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(out), "--labels", "--json"],
-                       capture_output=True, text=True)
+    p = isoflow_here("info", str(out), "--labels", "--json")
     assert p.returncode == 0, p.stderr
     table = json.loads(p.stdout)
     assert table["pitch"] == [0.5, 0.25] and table["origin"] == [1.0, 2.0]
@@ -2144,8 +2144,7 @@ def test_one_label_of_a_last_axis_of_one_entry_is_3d(tmp_path, name):
             f["labels"] = labels
     else:
         np.save(path, labels)
-    cmd = [sys.executable, "-m", "isoflow"]
-    done = subprocess.run([*cmd, "info", str(path), "--label", "1", "--json"], capture_output=True, text=True)
+    done = isoflow_here("info", str(path), "--label", "1", "--json")
     assert done.returncode == 0, done.stderr
     report = json.loads(done.stdout)
     assert report["shape"] == list(mask.shape) and report["pitch"] == pitch
@@ -2154,7 +2153,7 @@ def test_one_label_of_a_last_axis_of_one_entry_is_3d(tmp_path, name):
     assert report["betti"] == analyze(mask)["betti"] == [1, 0, 1]
     assert report["volume"] == 124 * math.prod(pitch)
     out = tmp_path / "x1.stl"
-    done = subprocess.run([*cmd, "surface", str(path), "--label", "1", "-o", str(out)], capture_output=True, text=True)
+    done = isoflow_here("surface", str(path), "--label", "1", "-o", str(out))
     assert done.returncode == 0, done.stderr
     mesh = trimesh.load(out)
     assert mesh.is_watertight and mesh.euler_number == 4 and len(mesh.split(only_watertight=True)) == 2
@@ -2195,15 +2194,13 @@ def test_a_label_a_float_image_cannot_hold_selects_no_voxel(tmp_path, suffix):
     assert np.count_nonzero(image.astype(np.float64) == 16777217) == 0
     assert np.count_nonzero(image == 16777217) == 8  # the rounding the command made
     for command in (["info", path], ["surface", path, "-o", tmp_path / "s.ply"]):
-        done = subprocess.run([sys.executable, "-m", "isoflow", *map(str, command), "--label", "16777217"],
-                              capture_output=True, text=True)
+        done = isoflow_here(*map(str, command), "--label", "16777217")
         lines = done.stderr.strip().splitlines()
         assert done.returncode == 2 and len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
         assert f"{path.name}: no voxel has label 16777217: a float32 array cannot hold it" in lines[0], lines
         assert "16777216" in lines[0], lines
     assert not (tmp_path / "s.ply").exists()
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--label", "16777216", "--json"],
-                          capture_output=True, text=True)
+    done = isoflow_here("info", str(path), "--label", "16777216", "--json")
     assert done.returncode == 0 and json.loads(done.stdout)["voxels"] == np.count_nonzero(image == 16777216.0)
 
 
@@ -2227,14 +2224,12 @@ def test_a_segmentation_named_without_or_past_its_labels_group_is_offered_by_nam
     for name, words in (("cells", ("no resolution level 'cells'", f"its segmentations: {store}:labels/cells")),
                         ("labels/cell", ("no array or group 'cell'", f"its groups: ['cells']; name one, "
                                                                      f"{store}:labels/cells"))):
-        done = subprocess.run([sys.executable, "-m", "isoflow", "info", f"{store}:{name}", "--labels"],
-                              capture_output=True, text=True)
+        done = isoflow_here("info", f"{store}:{name}", "--labels")
         lines = done.stderr.strip().splitlines()
         assert done.returncode == 2 and len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
         for word in words:
             assert word in lines[0], (word, lines[0])
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", f"{store}:labels/cells", "--labels", "--json"],
-                          capture_output=True, text=True)
+    done = isoflow_here("info", f"{store}:labels/cells", "--labels", "--json")
     assert done.returncode == 0 and [r["voxels"] for r in json.loads(done.stdout)["labels"]] == [
         np.count_nonzero(segmentation == v) for v in np.unique(segmentation) if v]
 

@@ -3,8 +3,6 @@ subprocess): a suffix in any case, an existing output replaced with
 --force, outputs that collide; the file is read back by its own library.
 The runs before and beside the one tested run in this process."""
 
-import contextlib
-import io
 import os
 import resource
 import shutil
@@ -16,8 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from isoflow.cli import main
+from in_process import isoflow_here as run_here
 
 ROOT = Path(__file__).resolve().parents[1]
 TORUS = ROOT / "meshes" / "torus.obj"
@@ -27,16 +24,6 @@ def run(*args) -> subprocess.CompletedProcess:
     """The command line in a subprocess, as a user runs it."""
     return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True)
 
-
-def run_here(*args) -> subprocess.CompletedProcess:
-    """The command line run in this process, where what is tested comes
-    after it or does not depend on the shell (a run that fills the compiled
-    passes' cache, a store to write into, the run that succeeds beside a
-    refusal run in the shell), which need no process of their own."""
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([*map(str, args)])
-    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def run_on_a_small_disk(limit: int, *args) -> subprocess.CompletedProcess:
@@ -422,7 +409,7 @@ def test_a_surface_per_label_into_a_name_that_is_no_glb_says_both_ways_that_work
     ways = p.stderr.rstrip("\n").split("; give ")[-1].split(" or ")
     assert len(ways) == 2, p.stderr
     for way in ways:  # each way out the line gives is a command that writes every label's surface
-        done = run("surface", tmp_path / "labels.npy", "--labels", *way.split(), "-q")
+        done = run_here("surface", tmp_path / "labels.npy", "--labels", *way.split(), "-q")
         assert done.returncode == 0, (way, done.stderr)
     import trimesh
 

@@ -5,12 +5,11 @@ by each format's own library with a known unit."""
 
 import json
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from in_process import isoflow_here
 
 import isoflow
 from isoflow.cli import main
@@ -71,8 +70,7 @@ def test_info_text_says_voxel_size_origin_and_unit(tmp_path):
     nib.save(nib.Nifti1Image(cube(), np.diag([*PITCH, 1.0])), tmp_path / "bare.nii.gz")  # xyzt units 0: unknown
 
     def second_line(name, *options):
-        done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / name), *options],
-                              capture_output=True, text=True)
+        done = isoflow_here("info", str(tmp_path / name), *options)
         assert done.returncode == 0, done.stderr
         return done.stdout.splitlines()[:2]
 
@@ -93,8 +91,7 @@ def series_json(tmp_path):
     img = nib.Nifti1Image(series, np.diag([*PITCH, 1.0]))
     img.header.set_xyzt_units("mm", "sec")
     nib.save(img, tmp_path / "t.nii.gz")
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "t.nii.gz"), "--json"],
-                          capture_output=True, text=True)
+    done = isoflow_here("info", str(tmp_path / "t.nii.gz"), "--json")
     assert done.returncode == 0, done.stderr
     return img, json.loads(done.stdout)
 
@@ -103,8 +100,7 @@ def test_info_text_gives_the_unit_to_the_three_spatial_axes_of_a_4d_file(tmp_pat
     # a time series: the fourth axis is frames, not millimetres
     img, got = series_json(tmp_path)
     assert got["unit"] == img.header.get_xyzt_units()[0] and got["pitch"][:3] == list(img.header.get_zooms()[:3])
-    text = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "t.nii.gz")],
-                          capture_output=True, text=True).stdout.splitlines()[1]
+    text = isoflow_here("info", str(tmp_path / "t.nii.gz")).stdout.splitlines()[1]
     sizes = " x ".join(f"{p:g}" for p in got["pitch"][:3])
     assert f"{sizes} mm, origin [" in text and text.endswith(
         f"] mm (4th axis: size {got['pitch'][3]:g}, origin {got['origin'][3]:g}), frame RAS"), text
@@ -250,8 +246,7 @@ def test_nrrd_with_space_units_isoflow_does_not_know_says_so(tmp_path):
     header = {"space dimension": 3, "space directions": np.diag(PITCH), "space units": ["mm", "mm", "furlong"],
               "kinds": ["domain"] * 3}
     nrrd.write(str(tmp_path / "seg.nrrd"), cube(), header, index_order="F")
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "seg.nrrd"), "--labels", "--json"],
-                          capture_output=True, text=True)
+    done = isoflow_here("info", str(tmp_path / "seg.nrrd"), "--labels", "--json")
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["unit"] is None
     assert "space units' differ by axis (mm, mm, furlong)" in done.stderr
@@ -290,15 +285,14 @@ def test_axes_in_different_length_units_are_read_in_the_first_axis_unit(tmp_path
     write(tmp_path / name)
     pitch = np.array(PITCH) * [1.0, 1.0, z_factor]
     centre0 = np.array([1.0, 2.0, 3.0]) * [1.0, 1.0, z_factor]
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / name), "--label", "1", "--json"],
-                          capture_output=True, text=True)
+    done = isoflow_here("info", str(tmp_path / name), "--label", "1", "--json")
     assert done.returncode == 0, done.stderr
     got = json.loads(done.stdout)
     assert got["unit"] == unit and same(got["pitch"], pitch) and same(got["origin"], centre0 - pitch / 2)
     assert np.isclose(got["volume"], np.count_nonzero(cube() == 1) * np.prod(pitch))
     assert "differ by axis" not in done.stderr
-    done = subprocess.run([sys.executable, "-m", "isoflow", "surface", str(tmp_path / name), "--label", "1", "-o",
-                           str(tmp_path / "one.ply")], capture_output=True, text=True)
+    done = isoflow_here("surface", str(tmp_path / name), "--label", "1", "-o",
+                           str(tmp_path / "one.ply"))
     assert done.returncode == 0, done.stderr
     mesh = trimesh.load(tmp_path / "one.ply", process=False)
     index = np.argwhere(cube() == 1)  # label 1's voxels, (x, y, z)
@@ -318,8 +312,7 @@ def test_a_unit_isoflow_does_not_know_is_said_once(tmp_path, labels):
     multiscales = group.attrs["multiscales"]
     multiscales[0]["axes"][0]["unit"] = "parsec"
     group.attrs["multiscales"] = multiscales
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "seg.zarr"), "--json", *labels],
-                          capture_output=True, text=True)
+    done = isoflow_here("info", str(tmp_path / "seg.zarr"), "--json", *labels)
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["unit"] is None
     said = [line for line in done.stderr.splitlines() if "differ by axis" in line]
@@ -399,7 +392,7 @@ def test_a_unit_field_that_holds_no_text_is_no_unit(tmp_path, suffix, stored, un
         with h5py.File(path, "w") as f:
             f.create_dataset("volume", data=volume).attrs.update({"pitch": 0.5, "unit": stored})
         field = "attribute 'unit'"
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--json"], capture_output=True, text=True)
+    done = isoflow_here("info", str(path), "--json")
     assert done.returncode == 0, done.stderr
     got = json.loads(done.stdout)
     assert got["unit"] == unit and same(got["pitch"], [0.5] * 3)

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from in_process import isoflow_here
 from test_input_errors import fails  # one line on stderr, exit 2
 
 from isoflow import analyze
@@ -276,8 +277,7 @@ def test_fill_applies_to_every_mesh(tmp_path, capsys):
 def test_the_command_in_a_subprocess(tmp_path, overlapping):
     a, b = overlapping
     out = tmp_path / "l.nrrd"
-    p = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(a), str(b), "--pitch", "0.1", "-o", str(out)],
-                       capture_output=True, text=True)
+    p = isoflow_here("voxelize", str(a), str(b), "--pitch", "0.1", "-o", str(out))
     assert p.returncode == 0, p.stderr
     assert "2 labels" in p.stdout and "inside two or more meshes" in p.stderr
     assert read_labels(out).spacing.tolist() == [0.1, 0.1, 0.1]
@@ -301,8 +301,8 @@ def test_overlap_error_on_one_mesh_is_refused_and_with_split_compares_its_bodies
     out = tmp_path / "o.npz"
 
     def run(*args):
-        return subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(both), "--resolution", "20",
-                               "-o", str(out), *args], capture_output=True, text=True)
+        return isoflow_here("voxelize", str(both), "--resolution", "20",
+                               "-o", str(out), *args)
 
     p = run("--overlap", "error")
     assert p.returncode == 2 and not out.exists(), p.stderr
@@ -798,8 +798,7 @@ def test_a_pitch_coarser_than_the_mesh_is_refused_naming_the_option(tmp_path, ki
     trimesh.creation.box().export(box)
     meshes = [box, box] if kind == "several" else [box]
     out = tmp_path / ("v.zarr" if kind == "zarr" else "v.npz")
-    p = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", *map(str, meshes), "--pitch", "1e300", "-o", str(out)],
-                       capture_output=True, text=True)
+    p = isoflow_here("voxelize", *map(str, meshes), "--pitch", "1e300", "-o", str(out))
     assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr, p.stderr
     assert "voxelize: --pitch 1e+300 is more than 2**40 times the mesh's size" in p.stderr, p.stderr
     assert "voxelize_" not in p.stderr and "pitch=" not in p.stderr

@@ -10,11 +10,9 @@ independently (the cells, each 4^3 voxels at a pitch of a quarter).
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
+from in_process import isoflow_here
 
 
 def union_faces(voxels: np.ndarray, doubled: float = 1.0, first: bool = False,
@@ -75,8 +73,7 @@ def test_union_drawn_double_sided_voxelises_as_the_union(tmp_path, n, seed, doub
     v, f = union_faces(voxels, doubled, first, seed)
     path, out = tmp_path / "model.obj", tmp_path / "model.npz"
     write_obj(path, v, f)
-    r = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(path), "--pitch", "0.25", "-o", str(out), "-q"],
-                       capture_output=True, text=True)
+    r = isoflow_here("voxelize", str(path), "--pitch", "0.25", "-o", str(out), "-q")
     assert r.returncode == 0, r.stderr
     lo, hi = np.argwhere(voxels).min(axis=0), np.argwhere(voxels).max(axis=0) + 1
     expected = np.kron(voxels[lo[0]:hi[0], lo[1]:hi[1], lo[2]:hi[2]], np.ones((4, 4, 4), bool))

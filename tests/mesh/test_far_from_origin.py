@@ -15,6 +15,7 @@ import sys
 
 import numpy as np
 import pytest
+from in_process import isoflow_here
 
 #: the 12 triangles of the box [0, 1]^3, outward
 BOX_FACES = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
@@ -32,9 +33,10 @@ def box_obj(path, offset: float, sides) -> None:
     path.write_text(text)
 
 
-def isoflow(*args):
-    """The command as a user runs it."""
-    return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True)
+def isoflow(*args: object) -> subprocess.CompletedProcess:
+    """The command's exit status, stdout and stderr, run in this process
+    (what it reports is tested, not the shell: tests/in_process.py)."""
+    return isoflow_here(*args)
 
 
 def test_far_boxes_keep_the_count_at_the_origin(tmp_path):

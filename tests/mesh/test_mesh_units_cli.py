@@ -5,12 +5,12 @@ its own: ``voxelize -o`` writes it, ``flow --json`` reports it. trimesh's
 
 import json
 import subprocess
-import sys
 import zipfile
 from pathlib import Path
 
 import numpy as np
 import pytest
+from in_process import isoflow_here
 
 trimesh = pytest.importorskip("trimesh")
 pytest.importorskip("lxml")  # trimesh's 3MF reader
@@ -21,7 +21,9 @@ SPELLED = {"inch": "in", "millimeter": "mm", "millimeters": "mm", "meters": "m",
 
 
 def isoflow(*args: object) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True)
+    """The command's exit status, stdout and stderr, run in this process
+    (what it reports is tested, not the shell: tests/in_process.py)."""
+    return isoflow_here(*args)
 
 
 def box_3mf(path: Path, unit: str | None) -> Path:

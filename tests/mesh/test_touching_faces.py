@@ -17,6 +17,7 @@ import sys
 
 import numpy as np
 import pytest
+from in_process import isoflow_here
 
 trimesh = pytest.importorskip("trimesh")
 
@@ -29,8 +30,7 @@ def boxes_obj(path, *boxes) -> None:
 
 def genus_json(path) -> dict:
     """``isoflow genus FILE --json`` as a user runs it."""
-    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(path), "--resolution", "16", "32", "--json"],
-                       capture_output=True, text=True)
+    r = isoflow_here("genus", str(path), "--resolution", "16", "32", "--json")
     assert r.returncode == 0, r.stderr
     return json.loads(r.stdout)
 
@@ -200,8 +200,7 @@ def test_a_cube_walled_in_by_others_voxelises_as_the_model(tmp_path):
     path = tmp_path / "cross.obj"
     cubes_obj(path, voxels)
     out = tmp_path / "cross.npz"
-    r = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(path), "--resolution", "30", "-o", str(out)],
-                       capture_output=True, text=True)
+    r = isoflow_here("voxelize", str(path), "--resolution", "30", "-o", str(out))
     assert r.returncode == 0, r.stderr
     got = np.load(out)["volume"]
     assert np.array_equal(got, np.kron(voxels, np.ones((10, 10, 10), bool)))
@@ -225,8 +224,7 @@ def test_voxel_models_with_some_outer_faces_drawn_both_ways_voxelise_as_themselv
               "cube": np.ones((2, 2, 2), bool), "stack": np.ones((1, 1, 2), bool)}[shape]
     path, out = tmp_path / f"{shape}.obj", tmp_path / f"{shape}.npz"
     cubes_obj(path, voxels, doubled=doubled, seed=seed)
-    r = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(path), "--pitch", "0.25", "-o", str(out), "-q"],
-                       capture_output=True, text=True)
+    r = isoflow_here("voxelize", str(path), "--pitch", "0.25", "-o", str(out), "-q")
     assert r.returncode == 0, r.stderr
     assert np.array_equal(np.load(out)["volume"], np.kron(voxels, np.ones((4, 4, 4), bool)))
 
@@ -247,8 +245,7 @@ def test_random_voxel_models_with_outer_faces_drawn_both_ways_voxelise_as_themse
     voxels[0, 0, 0] = voxels[-1, -1, -1] = True  # the grid spans the model's 4^3 box
     path, out = tmp_path / "model.obj", tmp_path / "model.npz"
     cubes_obj(path, voxels, doubled=doubled, seed=seed)
-    r = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(path), "--pitch", "0.25", "-o", str(out), "-q"],
-                       capture_output=True, text=True)
+    r = isoflow_here("voxelize", str(path), "--pitch", "0.25", "-o", str(out), "-q")
     assert r.returncode == 0, r.stderr
     assert np.array_equal(np.load(out)["volume"], np.kron(voxels, np.ones((4, 4, 4), bool)))
 
@@ -321,8 +318,8 @@ def test_voxels_joining_solids_on_an_edge_say_so(tmp_path, option, by, said):
     mesh = trimesh.load(tmp_path / "edge.obj", force="mesh")
     bodies = len(m3.Manifold(m3.Mesh(mesh.vertices.astype(np.float32), mesh.faces.astype(np.uint32))).decompose())
     assert (bodies, mesh.body_count) == (2, 1)
-    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "edge.obj"), "--resolution", "16",
-                        "32", "--no-step", "--json", *option], capture_output=True, text=True)
+    r = isoflow_here("genus", str(tmp_path / "edge.obj"), "--resolution", "16",
+                        "32", "--no-step", "--json", *option)
     d = json.loads(r.stdout)
     assert (d["kind"], d["bodies"], d["digital"][-1]["betti"][0]) == ("disagree", bodies, mesh.body_count)
     [note] = [n for n in d["notes"] if n["kind"] == "corner_joins"]
@@ -343,8 +340,8 @@ def test_voxels_joining_touching_solids_stop_stepping_once_settled(tmp_path, opt
     mesh = trimesh.load(tmp_path / "touch.obj", force="mesh")
     bodies = len(m3.Manifold(m3.Mesh(mesh.vertices.astype(np.float32), mesh.faces.astype(np.uint32))).decompose())
     assert (bodies, mesh.body_count, mesh.euler_number) == (2, 1, 3)
-    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "touch.obj"), "--resolution", "16",
-                        "32", "--json", *option], capture_output=True, text=True)
+    r = isoflow_here("genus", str(tmp_path / "touch.obj"), "--resolution", "16",
+                        "32", "--json", *option)
     assert r.returncode == 0, r.stderr
     d = json.loads(r.stdout)
     # the two grids asked agree (one component, genus 0): no third is tried
@@ -363,8 +360,8 @@ def test_bodies_closer_than_a_voxel_still_step_26_connected(tmp_path):
     boxes_obj(tmp_path / "gap.obj", [[0, 0, 0], [1, 1, 1]], [[1, 1, 1], [2, 2, 2]], [[-1, 0, 0], [-0.05, 1, 1]])
     mesh = trimesh.load(tmp_path / "gap.obj", force="mesh")
     assert mesh.body_count == 2
-    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "gap.obj"), "--resolution", "8",
-                        "16", "--connectivity", "26", "--json"], capture_output=True, text=True)
+    r = isoflow_here("genus", str(tmp_path / "gap.obj"), "--resolution", "8",
+                        "16", "--connectivity", "26", "--json")
     assert r.returncode == 0, r.stderr
     d = json.loads(r.stdout)
     assert d["digital"][0]["betti"][0] == 1  # the gap closed at 8 across (a voxel of 0.375)
@@ -438,8 +435,8 @@ def test_solids_close_but_not_touching_still_step_until_parted(tmp_path, connect
     boxes_obj(tmp_path / "gap.obj", [[0, 0, 0], [1, 1, 1]], [[1.01, 0, 0], [2.01, 1, 1]])
     mesh = trimesh.load(tmp_path / "gap.obj", force="mesh")
     assert (mesh.body_count, len(mesh.vertices)) == (2, 16)
-    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "gap.obj"), "--connectivity",
-                        connectivity, "--json"], capture_output=True, text=True)
+    r = isoflow_here("genus", str(tmp_path / "gap.obj"), "--connectivity",
+                        connectivity, "--json")
     assert r.returncode == 0, r.stderr
     d = json.loads(r.stdout)
     assert d["digital"][0]["betti"][0] == 1  # the gap closed at 64 (a voxel of 0.03)
@@ -459,8 +456,8 @@ def test_touching_ring_beside_a_close_box_steps_until_the_gap_parts(tmp_path):
     bodies = m3.Manifold(m3.Mesh(mesh.vertices.astype(np.float32), mesh.faces.astype(np.uint32))).decompose()
     expected = joined_betti(bodies)
     assert expected == [mesh.body_count, 1, 0] == [2, 1, 0]
-    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "ring_gap.obj"), "--resolution", "16",
-                        "32", "--connectivity", "26", "--json"], capture_output=True, text=True)
+    r = isoflow_here("genus", str(tmp_path / "ring_gap.obj"), "--resolution", "16",
+                        "32", "--connectivity", "26", "--json")
     assert r.returncode == 0, r.stderr
     d = json.loads(r.stdout)
     assert d["digital"][0]["betti"] == [1, 1, 0]  # the gap closed at 16 (a voxel of 0.25)
@@ -487,12 +484,11 @@ def test_crossing_components_facing_opposite_ways_are_no_union(tmp_path):
         return m3.Manifold(m3.Mesh(m.vertices.astype(np.float32), np.ascontiguousarray(f, np.uint32)))
 
     union = (solid(a) + solid(b, turn=True)).volume()
-    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "balls.ply"), "--resolution", "16",
-                        "32", "--no-step"], capture_output=True, text=True)
+    r = isoflow_here("genus", str(tmp_path / "balls.ply"), "--resolution", "16",
+                        "32", "--no-step")
     assert r.returncode == 0, r.stderr
-    d = json.loads(subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "balls.ply"),
-                                   "--resolution", "16", "32", "--no-step", "--json"],
-                                  capture_output=True, text=True).stdout)
+    d = json.loads(isoflow_here("genus", str(tmp_path / "balls.ply"),
+                                   "--resolution", "16", "32", "--no-step", "--json").stdout)
     assert d["solid"]["approximate"] is True
     assert abs(d["solid"]["volume"] - union) > 0.1 * union  # not the union of the two
     [row] = [line for line in r.stdout.splitlines() if line.strip().startswith("solid ")]
