@@ -12,13 +12,16 @@ import sys
 
 import numpy as np
 import pytest
+from in_process import isoflow_here
 
 Image = pytest.importorskip("PIL.Image")
 measure = pytest.importorskip("skimage.measure")
 
 
 def run(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True, cwd=cwd)
+    """The command's exit status, stdout and stderr in ``cwd``, run in this
+    process (what it reports is tested, not the shell: tests/in_process.py)."""
+    return isoflow_here(*args, cwd=cwd)
 
 
 @pytest.fixture

@@ -3,11 +3,10 @@ them): every mode read as the pixels' labels, row j and column i as pixel
 (i, j); colours, animations and damaged files refused in one line."""
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+from in_process import isoflow_here
 
 from isoflow import analyze, label_table
 
@@ -15,7 +14,9 @@ Image = pytest.importorskip("PIL.Image")
 
 
 def run(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True, cwd=cwd)
+    """The command's exit status, stdout and stderr in ``cwd``, run in this
+    process (what it reports is tested, not the shell: tests/in_process.py)."""
+    return isoflow_here(*args, cwd=cwd)
 
 
 def one_line_exit_2(proc, words):
