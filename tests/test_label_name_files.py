@@ -18,6 +18,7 @@ import sys
 
 import numpy as np
 import pytest
+from in_process import isoflow_here
 
 import isoflow
 from isoflow.cli import main
@@ -414,12 +415,10 @@ def test_excels_sep_line_declares_the_separator_and_is_no_row(tmp_path, seg, tex
     assert len(want) == 3
     for command in (["info", str(seg), "--labels", "--json", "--no-surfaces"],
                     ["surface", str(seg), "--labels", "-o", str(tmp_path / "s.glb")]):
-        done = subprocess.run([sys.executable, "-m", "isoflow", *command, "--names", str(path), "-q"],
-                              capture_output=True, text=True)
+        done = isoflow_here(*command, "--names", str(path), "-q")
         assert done.returncode == 0 and done.stderr == "", done.stderr
-    assert {r["label"]: r["name"] for r in json.loads(subprocess.run(
-        [sys.executable, "-m", "isoflow", "info", str(seg), "--labels", "--json", "--no-surfaces", "-q", "--names",
-         str(path)], capture_output=True, text=True).stdout)["labels"]} == want
+    table = isoflow_here("info", str(seg), "--labels", "--json", "--no-surfaces", "-q", "--names", str(path)).stdout
+    assert {r["label"]: r["name"] for r in json.loads(table)["labels"]} == want
     data = (tmp_path / "s.glb").read_bytes()
     # the GLB's JSON chunk, as the glTF 2.0 specification lays it out: header, chunk length, "JSON"
     length, kind = struct.unpack_from("<I4s", data, 12)
@@ -438,7 +437,6 @@ def test_excels_sep_line_declares_the_separator_and_is_no_row(tmp_path, seg, tex
 def test_a_table_without_a_header_that_is_no_list_of_names_is_one_line(tmp_path, seg, text, words):
     path = tmp_path / "names.csv"
     path.write_text(text)
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(seg), "--labels", "--names", str(path)],
-                          capture_output=True, text=True)
+    done = isoflow_here("info", str(seg), "--labels", "--names", str(path))
     assert done.returncode == 2 and done.stdout == "" and len(done.stderr.splitlines()) == 1, done.stderr
     assert done.stderr.startswith(f"isoflow info: error: --names {path}: ") and words in done.stderr, done.stderr

@@ -4,11 +4,10 @@ nibabel's xyzt units, pynrrd's space units), every step that keeps the
 object's place keeps it, and write_volume writes it, as nibabel reads it
 back."""
 
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+from in_process import isoflow_here
 
 import isoflow
 from isoflow import DigitalObject, IsoflowError, read_object, read_volume, run_flow, write_volume
@@ -73,9 +72,8 @@ def test_every_state_of_the_flow_keeps_the_unit(tmp_path):
 def test_the_flows_step_volumes_are_written_with_the_unit(tmp_path):
     nib = pytest.importorskip("nibabel")
     ball_nifti(tmp_path / "scan.nii.gz", "micron")
-    done = subprocess.run([sys.executable, "-m", "isoflow", "flow", str(tmp_path / "scan.nii.gz"), "--out",
-                           str(tmp_path / "run"), "--volumes", ".nii.gz", "--no-check"],
-                          capture_output=True, text=True)
+    done = isoflow_here("flow", str(tmp_path / "scan.nii.gz"), "--out",
+                           str(tmp_path / "run"), "--volumes", ".nii.gz", "--no-check")
     assert done.returncode == 0, done.stderr
     steps = sorted((tmp_path / "run").glob("step_*.nii.gz"))
     assert steps and {nib.load(p).header.get_xyzt_units()[0] for p in steps} == {"micron"}
@@ -90,8 +88,8 @@ def test_an_nrrd_of_a_unit_isoflow_cannot_write_flows_with_its_step_volumes(tmp_
     nrrd.write(str(tmp_path / "f.nrrd"), vol, {"space dimension": 3, "space directions": np.eye(3),
                                                "space units": ["furlong"] * 3})
     assert read_volume(tmp_path / "f.nrrd").unit is None
-    done = subprocess.run([sys.executable, "-m", "isoflow", "flow", str(tmp_path / "f.nrrd"), "--out",
-                           str(tmp_path / "run"), "--volumes", ".nrrd", "--no-check"], capture_output=True, text=True)
+    done = isoflow_here("flow", str(tmp_path / "f.nrrd"), "--out",
+                           str(tmp_path / "run"), "--volumes", ".nrrd", "--no-check")
     assert done.returncode == 0, done.stderr
     steps = sorted((tmp_path / "run").glob("step_*.nrrd"))
     assert steps and all("space units" not in nrrd.read_header(str(p)) for p in steps)

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from in_process import isoflow_here
 from scipy import ndimage
 
 from isoflow.cli import main
@@ -381,8 +382,7 @@ def test_a_closed_model_with_some_faces_drawn_double_sided_is_its_solid(tmp_path
     faces = np.concatenate([copies, model.faces] if "reversed first" in doubled else [model.faces, copies])
     path, out = tmp_path / "model.ply", tmp_path / "model.npz"
     trimesh.Trimesh(model.vertices, faces, process=False).export(path)
-    r = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(path), "--resolution", "20", "-o", str(out)],
-                       capture_output=True, text=True)
+    r = isoflow_here("voxelize", str(path), "--resolution", "20", "-o", str(out))
     assert r.returncode == 0, r.stderr
     assert f"{int(which.sum())} double-sided faces" in r.stderr and "walls" not in r.stderr
     d = np.load(out)
@@ -432,9 +432,8 @@ def test_strict_names_the_rule_the_mesh_is_read_by_without_it(tmp_path, mesh, fi
         path = DATA / mesh
 
     def command(*extra):
-        return subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(path), "--resolution", "8",
-                               "--fill", fill, "-o", str(tmp_path / f"{fill}.npz"), *extra],
-                              capture_output=True, text=True)
+        return isoflow_here("voxelize", str(path), "--resolution", "8",
+                               "--fill", fill, "-o", str(tmp_path / f"{fill}.npz"), *extra)
 
     refused = command("--strict")
     assert refused.returncode == 2 and not (tmp_path / f"{fill}.npz").exists()
@@ -756,8 +755,8 @@ def test_flood_note_names_surfaces_inside_only_where_a_surface_is_nested(tmp_pat
         parts.append(torus)
     mesh = trimesh.util.concatenate(parts)
     mesh.export(tmp_path / "hollow.ply")
-    done = subprocess.run([sys.executable, "-m", "isoflow", "genus", "hollow.ply", "--fill", "flood", "--resolution",
-                           "24", "48", "--no-step", "--json"], capture_output=True, text=True, cwd=tmp_path)
+    done = isoflow_here("genus", "hollow.ply", "--fill", "flood", "--resolution",
+                           "24", "48", "--no-step", "--json", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     verdict = json.loads(done.stdout)["verdict"]
     assert "--fill flood fills the solid's 1 cavity (manifold3d)" in verdict, verdict

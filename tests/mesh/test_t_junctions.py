@@ -8,12 +8,11 @@ from __future__ import annotations
 
 import contextlib
 import io
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 import trimesh
+from in_process import isoflow_here
 
 from isoflow.errors import IsoflowError
 from isoflow.mesh.genus import verify_genus
@@ -292,8 +291,8 @@ def test_strict_genus_says_what_genus_does_without_it(tmp_path, repair):
     copies = "; its digital rows count every copy of a face" if repair == "repeated_faces" else ""
     path = tmp_path / "cracked.ply"
     trimesh.Trimesh(v, f, process=False).export(path)
-    refused = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(path), "--strict", "--resolution", "16",
-                              "--no-step", "-q"], capture_output=True, text=True)
+    refused = isoflow_here("genus", str(path), "--strict", "--resolution", "16",
+                              "--no-step", "-q")
     line = refused.stderr.strip()
     assert refused.returncode == 2 and "\n" not in line and "Traceback" not in line
     assert line.endswith(f"(without --strict genus {said}, which closes the mesh, and counts its genus{copies})")
@@ -322,8 +321,8 @@ def test_strict_refusal_counts_each_edge_of_a_repeated_face_once(tmp_path, comma
     assert nonmanifold.sum() > 0 and inconsistent.sum() > 0 and not (inconsistent & ~nonmanifold).any()
     mesh.export(tmp_path / "twice.ply")
     extra = ["--no-step", "-q"] if command == "genus" else ["-o", "v.npz", "-q"]
-    refused = subprocess.run([sys.executable, "-m", "isoflow", command, "twice.ply", "--strict", "--resolution", "16",
-                              *extra], capture_output=True, text=True, cwd=tmp_path)
+    refused = isoflow_here(command, "twice.ply", "--strict", "--resolution", "16",
+                              *extra, cwd=tmp_path)
     line = refused.stderr.strip()
     assert refused.returncode == 2 and "\n" not in line and "Traceback" not in line, line
     assert (f"0 boundary edges, {nonmanifold.sum()} non-manifold edges, {inconsistent.sum()} inconsistently "

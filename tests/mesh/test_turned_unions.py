@@ -12,12 +12,12 @@ gives independently (the cells, each 4^3 voxels at a pitch of a quarter).
 
 from __future__ import annotations
 
-import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from in_process import isoflow_here
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from test_double_sided_hollows import union_faces, write_obj  # noqa: E402
@@ -41,8 +41,7 @@ def turned(n: int, seed: int, full: float, both: bool) -> tuple[np.ndarray, np.n
 def voxelised(tmp_path, v: np.ndarray, f: np.ndarray) -> np.ndarray:
     path, out = tmp_path / "model.obj", tmp_path / "model.npz"
     write_obj(path, v, f)
-    r = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(path), "--pitch", "0.25", "-o", str(out), "-q"],
-                       capture_output=True, text=True)
+    r = isoflow_here("voxelize", str(path), "--pitch", "0.25", "-o", str(out), "-q")  # the voxels are tested, not the shell
     assert r.returncode == 0, r.stderr
     return np.load(out)["volume"]
 

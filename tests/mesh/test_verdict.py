@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from in_process import isoflow_here
 
 from isoflow.cli import main
 from isoflow.mesh.genus import verify_genus
@@ -579,16 +580,13 @@ def test_a_moebius_band_stops_after_the_resolutions_asked(tmp_path):
     to --max-resolution (1024: hundreds of components, seconds) for
     nothing. It stops after the resolutions asked and says why; an open
     mesh that is orientable (cube_no_bottom.obj) still steps."""
-    import subprocess
-    import sys
 
     band = _band(1)
     fixed = band.copy()
     fixed.fix_normals()
     assert not fixed.is_winding_consistent  # trimesh: no turning of its faces agrees
     band.export(tmp_path / "band.obj")
-    done = subprocess.run([sys.executable, "-m", "isoflow", "genus", "band.obj", "--max-resolution", "256", "--json"],
-                          capture_output=True, text=True, cwd=tmp_path)
+    done = isoflow_here("genus", "band.obj", "--max-resolution", "256", "--json", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     r = json.loads(done.stdout)
     assert [d["resolution"] for d in r["digital"]] == [64, 128]  # the default resolutions, none doubled
@@ -635,16 +633,14 @@ def test_max_resolution_alone_keeps_the_default_grids_within_it(tmp_path, cap, g
     been asked. Within the cap the two finest grids are the cap and its
     half; a cap above 128 leaves the defaults. The torus (trimesh, genus 1
     by its Euler number) agrees at them."""
-    import subprocess
-    import sys
 
     import trimesh
 
     t = trimesh.creation.torus(1.0, 0.3)
     assert t.euler_number == 0 and t.is_watertight
     t.export(tmp_path / "torus.ply")
-    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "torus.ply"), "--max-resolution",
-                        str(cap), "--json"], capture_output=True, text=True)
+    r = isoflow_here("genus", str(tmp_path / "torus.ply"), "--max-resolution",
+                        str(cap), "--json")
     assert r.returncode == 0, r.stderr
     d = json.loads(r.stdout)
     assert [e["resolution"] for e in d["digital"]] == grids
@@ -665,8 +661,6 @@ def test_a_closed_surface_drawn_double_sided_stops_when_its_rows_settle(tmp_path
     changes and said '1 digital component for the solid's 0 bodies ...
     parts thinner than a voxel break apart'. The bodies are not compared:
     it stops at 64 and 128, where the rows agree."""
-    import subprocess
-    import sys
 
     import manifold3d
     import trimesh
@@ -674,8 +668,7 @@ def test_a_closed_surface_drawn_double_sided_stops_when_its_rows_settle(tmp_path
     one = trimesh.creation.icosphere(2) if shape == "sphere" else trimesh.creation.torus(1, 0.35)
     genus = manifold3d.Manifold(manifold3d.Mesh(one.vertices.astype(np.float32), one.faces.astype(np.uint32))).genus()
     trimesh.Trimesh(one.vertices, np.vstack([one.faces, one.faces[:, ::-1]]), process=False).export(tmp_path / "two.ply")
-    done = subprocess.run([sys.executable, "-m", "isoflow", "genus", "two.ply", "--max-resolution", "256", "--json", "-q"],
-                          capture_output=True, text=True, cwd=tmp_path)
+    done = isoflow_here("genus", "two.ply", "--max-resolution", "256", "--json", "-q", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     r = json.loads(done.stdout)
     assert [d["resolution"] for d in r["digital"]] == [64, 128]
@@ -685,11 +678,8 @@ def test_a_closed_surface_drawn_double_sided_stops_when_its_rows_settle(tmp_path
 
 
 def _genus_json(cwd, *argv) -> dict:
-    import subprocess
-    import sys
 
-    done = subprocess.run([sys.executable, "-m", "isoflow", "genus", *map(str, argv), "--json", "-q"],
-                          capture_output=True, text=True, cwd=cwd)
+    done = isoflow_here("genus", *map(str, argv), "--json", "-q", cwd=cwd)
     assert done.returncode == 0, done.stderr
     return json.loads(done.stdout)
 
@@ -752,8 +742,6 @@ def test_strict_says_the_edges_balance_only_once_faces_are_turned(tmp_path):
     edges balance, so it bounds a solid ...)": of the edges it had just
     counted as inconsistent. They balance once the 100 faces are turned
     back, as trimesh's fix_normals turns them."""
-    import subprocess
-    import sys
 
     import trimesh
 
@@ -765,8 +753,7 @@ def test_strict_says_the_edges_balance_only_once_faces_are_turned(tmp_path):
     fixed.fix_normals()
     turned = int(np.count_nonzero(np.any(fixed.faces != faces, axis=1)))
     assert turned in (100, len(faces) - 100)  # fix_normals may turn the others instead: the same surface
-    done = subprocess.run([sys.executable, "-m", "isoflow", "genus", "turned.ply", "--strict", "--resolution", "16"],
-                          capture_output=True, text=True, cwd=tmp_path)
+    done = isoflow_here("genus", "turned.ply", "--strict", "--resolution", "16", cwd=tmp_path)
     assert done.returncode == 2 and done.stdout == "" and len(done.stderr.splitlines()) == 1, done.stderr
     assert "inconsistently oriented edges" in done.stderr
     assert "its edges balance once 100 faces are turned over to agree with their neighbours, so it bounds a solid" \

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from in_process import isoflow_here
 
 import isoflow
 from isoflow.cli import main
@@ -604,16 +605,14 @@ def test_homogeneous_and_dimensioned_off_are_read_as_the_3d_points_they_give(tmp
     """Geomview's 4OFF gives x y z w for the point (x/w, y/w, z/w), nOFF
     its space dimension first: a 2-unit cube either way, 4^3 voxels of
     0.5, as trimesh counts the cube written as plain OFF (volume 8)."""
-    import subprocess
-    import sys
 
     plain = "OFF\n8 6 0\n" + "\n".join(" ".join(map(str, c)) for c in CUBE_CORNERS) + "\n" + "\n".join(CUBE_QUADS) + "\n"
     (tmp_path / "plain.off").write_text(plain)
     assert trimesh.load(tmp_path / "plain.off").volume == pytest.approx(8.0)
     text = header + "8 6 0\n" + "\n".join(corner(*c) for c in CUBE_CORNERS) + "\n" + "\n".join(CUBE_QUADS) + "\n"
     (tmp_path / "m.off").write_text(text)
-    done = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(tmp_path / "m.off"), "--pitch", "0.5",
-                           "-o", str(tmp_path / "m.npz")], capture_output=True, text=True)
+    done = isoflow_here("voxelize", str(tmp_path / "m.off"), "--pitch", "0.5",
+                           "-o", str(tmp_path / "m.npz"))
     assert done.returncode == 0, done.stderr
     with np.load(tmp_path / "m.npz") as f:
         assert f["volume"].shape == (4, 4, 4) and int(f["volume"].sum()) == 8 / 0.5**3
