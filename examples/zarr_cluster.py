@@ -139,7 +139,7 @@ def worker_notes(client, every=1.0, wait=None):
     The polls, the last one too, run on a thread, and the run's end waits
     for them at most ``wait`` seconds (None: :data:`LAST_POLL_SECONDS`): a
     poll that hangs (a worker that never answers: ``client.run`` has no
-    time limit) held the script for ever once its run was done. One that
+    time limit) would hold the script for ever once its run is done. One that
     hangs is given up in silence, as a failed one is: the notes only
     explain a wait that is over by then, and a line about them would stand
     beside the run's own result or error, which is what the script

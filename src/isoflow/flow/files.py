@@ -573,8 +573,8 @@ class FlowWriter:
         raised once every file of this run is in place (as the staging
         directory goes, or after :meth:`finish` returned) says so, and
         which of the previous run's files it does not replace are gone and
-        which are left: a second interrupt, as the first one's removal of
-        them was being wound up, said the run was complete."""
+        which are left (a second interrupt may stop their removal part
+        way, and "complete" would hide the files still there)."""
         if str(exc).strip():
             return exc
         if self.in_place:

@@ -267,8 +267,8 @@ def followed_seams(corners: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, 
     ring = ring_pairs(corners, faces, side, uses, edge)
     if len(ring):
         # a component whose faces agree everywhere keeps the orientation it
-        # was given: two solids that overlap along an edge they share step
-        # the winding number 0, 1, 2, 1 round it, not 0, 1, 0, 1
+        # is drawn with: two solids that overlap along an edge they share
+        # step the winding number 0, 1, 2, 1 round it, not 0, 1, 0, 1
         sheets, sheet = components(m, face[pairs[:, 0]], face[pairs[:, 1]])
         seamed = np.bincount(sheet[face[pairs[~agree, 0]]], minlength=sheets) > 0
         ring = ring[seamed[sheet[face[ring[:, 0]]]] | seamed[sheet[face[ring[:, 1]]]]]
