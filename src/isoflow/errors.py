@@ -16,6 +16,7 @@ import re
 import sys
 import unicodedata
 import warnings
+from collections.abc import Iterable
 from pathlib import PurePath
 from types import FrameType
 
@@ -69,6 +70,53 @@ def counted(n: int, one: str, many: str | None = None) -> str:
     ('1 cavity', '3 cavities', '0 labels')
     """
     return f"{n} {one if n == 1 else many or one + 's'}"
+
+
+def some_of(items: Iterable[object], shown: int = 3, sep: str = ", ", noun: str = "") -> str:
+    """The first ``shown`` of ``items`` in a message, and how many more
+    there are: the one wording of every list a message cuts short (a run's
+    hundreds of step files, an image's thousands of labels).
+
+    The count follows the items behind ``sep`` and "and" where two or more
+    are shown (``"a, b, c, and 4 more"``): an item may hold an "and" of its
+    own (``"1 and 2: 5"``, a pair of labels) or be a clause (``sep="; "``),
+    which a bare "and" would run into the count.
+
+    Parameters
+    ----------
+    items : iterable
+        What the message lists, in the order it names them; each as
+        ``str`` prints it.
+    shown : int, optional
+        How many are named (at least 1); 3 by default.
+    sep : str, optional
+        What separates them; ``", "`` by default.
+    noun : str, optional
+        What an item is (singular), said after the count: ``"pair"`` gives
+        ``"and 1 more pair"``, ``"and 4 more pairs"``; nothing by default.
+
+    Returns
+    -------
+    str
+        The items joined by ``sep``, all of them where there are no more
+        than ``shown``.
+
+    Examples
+    --------
+    >>> some_of(["a", "b", "c", "d", "e"]), some_of(["a", "b"]), some_of([])
+    ('a, b, c, and 2 more', 'a, b', '')
+    >>> some_of(["step_000.zarr", "step_001.zarr"], shown=1), some_of(range(12), shown=2, noun="label")
+    ('step_000.zarr and 1 more', '0, 1, and 10 more labels')
+    >>> some_of(["x is 0.5", "y is -1", "z is 2"], shown=2, sep="; ")
+    'x is 0.5; y is -1; and 1 more'
+    """
+    words = [str(item) for item in items]
+    shown = max(1, shown)
+    if len(words) <= shown:
+        return sep.join(words)
+    rest = len(words) - shown
+    count = counted(rest, f"more {noun}") if noun else f"{rest} more"
+    return sep.join(words[:shown]) + (sep if shown > 1 else " ") + "and " + count
 
 
 def with_article(word: object) -> str:

@@ -937,7 +937,7 @@ def test_an_interrupt_once_the_run_is_in_place_says_so(tmp_path, capsys, monkeyp
         assert err == [f"isoflow: interrupted: {out}: interrupted after the run's files were put in place; this "
                        f"run's {len(written)} files are in place; of the previous run's {len(left)} files that it "
                        f"does not replace, none of them was removed, {len(left)} are left beside them "
-                       f"({', '.join(left[:3])}{f' and {len(left) - 3} more' if len(left) > 3 else ''})"], err
+                       f"({', '.join(left[:3])}{f', and {len(left) - 3} more' if len(left) > 3 else ''})"], err
     else:
         assert after == written
         assert err == [f"isoflow: interrupted: {out}: stopped after the run was complete; its {len(written)} files "

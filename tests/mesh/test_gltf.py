@@ -481,10 +481,11 @@ def test_a_gltf_without_its_buffer_file_names_it(tmp_path, capsys):
     assert len(err) == 1 and f"model.gltf: buffer 0 is the file '{uri}', which is not there ({tmp_path / uri})" in err[0]
 
 
-def fan_capped_box_glb(path) -> None:
+def fan_capped_box_glb(path, fans: int = 1) -> None:
     """A GLB of a unit box whose top is a primitive of its own drawn as a
-    triangle fan (glTF mode 6) of its four corners, the other ten
-    triangles a primitive of mode 4."""
+    triangle fan (glTF mode 6) of its four corners (``fans`` such
+    primitives, each the same fan), the other ten triangles a primitive
+    of mode 4."""
     box = trimesh.creation.box()
     v = box.vertices.astype(np.float32)
     top = np.all(v[box.faces][:, :, 2] > 0, axis=1)
@@ -497,7 +498,8 @@ def fan_capped_box_glb(path) -> None:
     tree = {
         "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0, "name": "box"}],
         "meshes": [{"name": "capped", "primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "mode": 4},
-                                                     {"attributes": {"POSITION": 0}, "indices": 2, "mode": 6}]}],
+                                                     *[{"attributes": {"POSITION": 0}, "indices": 2, "mode": 6}]
+                                                     * fans]}],
         "buffers": [{"byteLength": len(binary)}],
         "bufferViews": [{"buffer": 0, "byteOffset": o, "byteLength": n} for o, n in views],
         "accessors": [{"bufferView": 0, "componentType": 5126, "count": len(v), "type": "VEC3",
@@ -530,6 +532,18 @@ def test_a_triangle_fan_trimesh_skips_is_refused(tmp_path, capsys, command, arch
         path, where = tmp_path / "model.zip", f"{tmp_path / 'model.zip'}:capped.glb"
     line = refusal(capsys, tmp_path, command, path)
     assert f"{where}: mesh 0 ('capped') primitive 1 is drawn as a triangle fan (glTF mode 6)" in line
+
+
+def test_triangle_fans_are_named_in_a_sentence(tmp_path, capsys):
+    """Three fan primitives: the first named, the other two counted, and
+    the verb agrees with them (the count once followed the sentence's
+    verb in brackets: "primitive 1 is drawn as a triangle fan (glTF mode 6)
+    (and 2 more)")."""
+    path = tmp_path / "capped.glb"
+    fan_capped_box_glb(path, fans=3)
+    assert len(trimesh.load(path, force="mesh", process=False).faces) == 10  # none of the three fans is read
+    line = refusal(capsys, tmp_path, ["genus"], path)
+    assert f"{path}: mesh 0 ('capped') primitive 1 and 2 more are drawn as triangle fans (glTF mode 6), " in line
 
 
 def box_gltf(path, modes) -> None:

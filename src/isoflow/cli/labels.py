@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import IsoflowError, counted, line_text, path_text, terminal_text
+from ..errors import IsoflowError, counted, line_text, path_text, some_of, terminal_text
 from .table_text import csv_rows, json_rows, measure_text
 
 #: rows the terminal shows before the summary
@@ -553,9 +553,7 @@ def _by_type(name, asked: np.ndarray, dtype) -> tuple[np.ndarray, np.ndarray]:
 def _some(values, most: int = 8) -> str:
     # each value as it is: NumPy makes float64 of ints that no one integer type
     # holds together (2**63 beside 5, or beside -1), which would print 9.223372036854776e+18
-    first = values[:most]
-    shown = ", ".join(str(v) for v in (first.tolist() if isinstance(first, np.ndarray) else list(first)))
-    return shown + (f", ... ({len(values) - most} more)" if len(values) > most else "")
+    return some_of(values.tolist() if isinstance(values, np.ndarray) else list(values), most)
 
 
 def cmd_info_labels(args: argparse.Namespace) -> int:

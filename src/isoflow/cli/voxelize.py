@@ -204,5 +204,5 @@ def label_summary(out: str | Path, r) -> str:
     for i, (name, n) in enumerate(zip(r.names[:LISTED_LABELS], r.voxels), 1):
         lines.append(f"{i:>6}  {n:>{width},}  {terminal_text(name)}")
     if len(r.names) > LISTED_LABELS:
-        lines.append(f"{'':>6}  ... and {len(r.names) - LISTED_LABELS} more labels")
+        lines.append(f"{'':>6}  ... {counted(len(r.names) - LISTED_LABELS, 'more label')}")
     return "\n".join(lines)

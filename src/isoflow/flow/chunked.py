@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, check_callable, check_switch, counted
+from ..errors import IsoflowError, check_callable, check_switch, counted, some_of
 from ..mesh.outputs import remove_entry
 from ..scale.chunks import (
     compute,
@@ -733,8 +733,8 @@ def clear_earlier_run(directory: Path, force: bool) -> None:
     for store in earlier:  # all checked before any goes: force replaces a run's stores, never a folder of the user's
         refuse_foreign_step(store)
     if earlier and not force:
-        raise IsoflowError(f"{directory}: holds the stores of an earlier run ({earlier[0].name}"
-                           f"{f' and {len(earlier) - 1} more' if len(earlier) > 1 else ''}); give an empty directory, "
+        raise IsoflowError(f"{directory}: holds the stores of an earlier run "
+                           f"({some_of([s.name for s in earlier], shown=1)}); give an empty directory, "
                            "or force=True to replace them")
     for store in earlier:  # a link (or a file) named as a step store goes as the store would; a link's target stays
         remove_entry(store)

@@ -28,7 +28,7 @@ from pathlib import Path
 
 from ..digital.lattice import DigitalObject
 from ..digital.surface import boundary_mesh
-from ..errors import IsoflowError, warn
+from ..errors import IsoflowError, some_of, warn
 from ..mesh import export
 from ..mesh.outputs import (
     atomic_write,
@@ -61,13 +61,6 @@ def _step_file_pattern() -> re.Pattern:
 
     suffixes = sorted({".ply", *volume_suffixes(writable=True)}, key=len, reverse=True)
     return re.compile(r"step_\d+(" + "|".join(re.escape(s) for s in suffixes) + r")", re.IGNORECASE)
-
-
-def _some_names(paths: list[Path], shown: int = 3) -> str:
-    """The names of ``paths``, the first ``shown`` of them and how many
-    more (a run of hundreds of steps leaves as many files)."""
-    names = sorted(p.name for p in paths)
-    return ", ".join(names[:shown]) + (f" and {len(names) - shown} more" if len(names) > shown else "")
 
 
 def step_width(last_step: int) -> int:
@@ -634,9 +627,11 @@ class FlowWriter:
             return ""
         gone = [old for old in self.earlier if old not in left]
         was = "was" if len(gone) == 1 else "were"
-        removed = f"{len(gone)} of them {was} removed ({_some_names(gone)}), " if gone else "none of them was removed, "
+        removed = f"{len(gone)} of them {was} removed ({some_of(sorted(p.name for p in gone))}), " if gone \
+            else "none of them was removed, "
         return (f"; of the previous run's {len(self.earlier)} files that it does not replace, {removed}"
-                f"{len(left)} {'is' if len(left) == 1 else 'are'} left beside them ({_some_names(left)})")
+                f"{len(left)} {'is' if len(left) == 1 else 'are'} left beside them "
+                f"({some_of(sorted(p.name for p in left))})")
 
     def _commit_left(self, target: Path, exc: BaseException, done: int, previous: str | None) -> str:
         """The line of a failure (or an interrupt) while :meth:`_commit` put

@@ -28,6 +28,8 @@ import struct
 from pathlib import Path
 from urllib.parse import unquote
 
+from ..errors import some_of
+
 #: buffer-view compression that trimesh reads as if it were the data
 COMPRESSIONS = ("EXT_meshopt_compression", "KHR_meshopt_compression")
 #: the GLB header (magic, version, length) and the first chunk's (length, type)
@@ -217,11 +219,10 @@ def skipped_primitive(where: str | Path, tree: dict) -> str | None:
     fans = [(index, at, name) for index, at, name, mode in _modes(tree) if mode == TRIANGLE_FAN]
     if not fans:
         return None
-    index, at, name = fans[0]
-    more = f" (and {len(fans) - 1} more)" if len(fans) > 1 else ""
-    return (f"{where}: mesh {index}{_named(name)} primitive {at} is drawn as a triangle fan (glTF mode 6)"
-            f"{more}, which isoflow's reader (trimesh) skips: the model would be read without its "
-            "faces; export it with triangles (mode 4, the default of Blender's and most exporters)")
+    named = some_of((f"mesh {index}{_named(name)} primitive {at}" for index, at, name in fans), shown=1)
+    drawn = "is drawn as a triangle fan" if len(fans) == 1 else "are drawn as triangle fans"
+    return (f"{where}: {named} {drawn} (glTF mode 6), which isoflow's reader (trimesh) skips: the model would be "
+            "read without its faces; export it with triangles (mode 4, the default of Blender's and most exporters)")
 
 
 #: glTF's primitive modes of no face (points, lines, line loops, line

@@ -36,7 +36,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..errors import IsoflowError, check_callable, check_switch, choice_of, given_text
+from ..errors import IsoflowError, check_callable, check_switch, choice_of, given_text, some_of
 from ..results import Result
 from ..scale import memory
 from .bodies import Body, mesh_bodies
@@ -476,12 +476,9 @@ class _Share:
 def overlap_text(r: LabelVoxelization, things: str = "meshes") -> str:
     """The overlaps in words: how many voxels, the first pairs and counts;
     ``things``: what the labels are (``"bodies"`` of files split)."""
-    said = [f"{i} and {j}: {c}" for i, j, c in r.overlaps[:NAMED_PAIRS]]
-    more = len(r.overlaps) - NAMED_PAIRS
-    if more > 0:
-        said.append(f"and {more} more pairs")
+    said = some_of((f"{i} and {j}: {c}" for i, j, c in r.overlaps), NAMED_PAIRS, noun="pair")
     voxels = "voxel lies" if r.overlap_voxels == 1 else "voxels lie"
-    return f"{r.overlap_voxels} {voxels} inside two or more {things} (labels {', '.join(said)})"
+    return f"{r.overlap_voxels} {voxels} inside two or more {things} (labels {said})"
 
 
 def _things(split: bool) -> tuple[str, str]:

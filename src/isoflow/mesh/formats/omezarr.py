@@ -51,7 +51,7 @@ from numpy.typing import ArrayLike
 
 from ...digital.lattice import DigitalObject
 from ...digital.report import Report
-from ...errors import IsoflowError, check_path, counted, warn
+from ...errors import IsoflowError, check_path, counted, some_of, warn
 from ...scale.arrays import NotBinary
 from ...scale.chunks import (
     axis_names,
@@ -283,7 +283,7 @@ def label_properties(array, where: str | None = None) -> dict[int, str] | None:
         else:
             skipped.append(f"label {label}'s name is {_json_text(name)}, not text")
     if skipped:
-        shown = "; ".join(skipped[:3]) + (f"; and {len(skipped) - 3} more" if len(skipped) > 3 else "")
+        shown = some_of(skipped, sep="; ")
         entries = counted(len(skipped), "image-label properties entry", "image-label properties entries")
         warn(f"{where or array.store}: {entries} not read as a label name: {shown}")
     return dict(sorted(found.items())) or None

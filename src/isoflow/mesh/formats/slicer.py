@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...errors import IsoflowError, line_text
+from ...errors import IsoflowError, line_text, some_of
 
 #: the keys of a NRRD header's per-axis fields, which lose the layer axis
 AXIS_FIELDS = ("sizes", "space directions", "kinds", "spacings", "thicknesses", "axis mins", "axis maxs",
@@ -353,8 +353,7 @@ def segment_names(found: list[Segment], layer: int) -> str:
     'liver (label 1), tumor (label 2)'
     """
     held = [f"{line_text(s.name)} (label {s.label})" for s in found if s.layer == layer]
-    more = f", and {len(held) - SHOWN} more" if len(held) > SHOWN else ""
-    return ", ".join(held[:SHOWN]) + more if held else "no segment"
+    return some_of(held, SHOWN) if held else "no segment"
 
 
 def listing(found: list[Segment], count: int) -> str:
