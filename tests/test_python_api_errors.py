@@ -2132,6 +2132,37 @@ def test_write_labels_names_the_argument_refused(kwargs, words, tmp_path):
     assert not any(tmp_path.iterdir())
 
 
+def test_a_store_voxel_that_is_no_label_is_refused_naming_the_function_called(tmp_path):
+    """A zarr store of floats holding 0.5 in its second slab: the refusal
+    found while the slabs are read named the voxel alone ("voxel (3, 1, 1)
+    holds 0.5: ..."), where label_table's begins with the function and its
+    argument; the command line names the store, not the function."""
+    zarr = pytest.importorskip("zarr")
+    from in_process import isoflow_here
+
+    from isoflow.digital.label_blocks import label_table_blocks
+
+    image = np.zeros((4, 4, 4), np.float32)
+    image[3, 1, 1] = 0.5
+    store = zarr.open_array(tmp_path / "img.zarr", mode="w", shape=image.shape, chunks=(2, 4, 4), dtype="f4")
+    store[:] = image
+    said = "voxel (3, 1, 1) holds 0.5: not a whole number, so not a label"
+    with pytest.raises(IsoflowError, match=f"^label_table_blocks: array .*: {re.escape(said)}$"):
+        label_table_blocks(store, layers=[2, 2])
+    run = isoflow_here("info", tmp_path / "img.zarr", "--labels")
+    assert run.returncode == 2 and run.stderr.count("\n") == 1, run.stderr
+    assert f"{tmp_path / 'img.zarr'}: {said}" in run.stderr and "label_table_blocks" not in run.stderr, run.stderr
+
+
+@pytest.mark.parametrize("unit", ["bad", 5])
+def test_write_volume_names_the_unit_refused(unit, tmp_path):
+    """write_volume's refusal of a unit began with the output file's name,
+    as if the file were at fault; write_labels's begins with the function."""
+    with pytest.raises(IsoflowError, match=f"^{re.escape(f'write_volume: unit {unit!r} is not a length unit')}"):
+        isoflow.write_volume(np.ones((2, 2, 2), bool), tmp_path / "v.nii.gz", unit=unit)
+    assert not any(tmp_path.iterdir())
+
+
 @pytest.mark.parametrize("call", ["analyze_chunked", "write_surface_blocks"])
 def test_a_chunked_label_image_is_refused_naming_the_function_called(call, tmp_path):
     """analyze_chunked(dask labels) said "dask array: not a binary volume

@@ -472,7 +472,7 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, g
                                        pitch=place.spacing, origin=place.origin, labels=wanted, surfaces=surfaces,
                                        progress=show, background=background)
         except IsoflowError as exc:  # a voxel that is no label, a slab that would not fit
-            named = str(exc).startswith(f"{slabs.where}: ")  # (a damaged chunk's line names the store already)
+            named = (exc.command_line or str(exc)).startswith(f"{slabs.where}: ")  # (a damaged chunk's names it)
             raise (exc if named else exc.at(args.input)) from None
     # a float store's labels are int64, as a float file's are read (read_labels): the same --json
     kind = label_dtype(slabs.dtype) if np.dtype(slabs.dtype).kind in "fb" else slabs.dtype

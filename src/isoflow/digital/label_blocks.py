@@ -27,6 +27,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from ..errors import IsoflowError
+from ..scale.chunks import argument_words
 from .connectivity import check_connectivity
 from .float64 import unheld_columns
 from .label_table import (
@@ -104,7 +106,8 @@ def label_table_blocks(
     >>> across["b2"].tolist(), across["bbox-2"].tolist() == t["bbox-2"].tolist()
     ([1], True)
     """
-    checked_image(np.zeros((1,) * len(array.shape), array.dtype), "label_table_blocks: array")  # 3D, of labels
+    where = argument_words(array, "label_table_blocks")
+    checked_image(np.zeros((1,) * len(array.shape), array.dtype), where)  # 3D, of labels
     kind = label_dtype(array.dtype)
     conn = check_connectivity(3, connectivity)
     place = DigitalObject.placement(3, pitch=pitch, origin=origin)
@@ -118,8 +121,14 @@ def label_table_blocks(
         return label_table(np.zeros(array.shape, kind), conn, pitch=place.spacing, origin=place.origin,
                            labels=labels, surfaces=surfaces, background=background)
     if sum(sizes) != nx or min(sizes) < 1:
-        raise ValueError(f"layers {sizes} do not add up to the array's {nx} layers")
-    found = slab_rows(read, conn, wanted, surfaces, sizes, progress, axes=across or (0, 1, 2), background=background)
+        raise IsoflowError(f"label_table_blocks: layers: {sizes} do not add up to the array's {nx} layers")
+    try:
+        found = slab_rows(read, conn, wanted, surfaces, sizes, progress, axes=across or (0, 1, 2),
+                          background=background)
+    except IsoflowError as exc:
+        # a voxel that is no label, a slab too wide: named after the function and its argument, as label_table's
+        # refusals are; the command line, which names the store before them, keeps the words as they were
+        raise exc.called(where) from None
     if across is not None:
         found = rows_in_image_order(found, across)
     return unheld_columns(columns(found, place.spacing, place.origin, surfaces), place.origin, place.spacing,

@@ -1276,7 +1276,7 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
         # a label image (2D or 3D, as write_labels takes it) is written as one by write_labels: a table is no file
         raise NotBinary(f"{exc.bare}, or write its labels with isoflow.write_labels(labels, path)", exc.bare,
                         every=exc.every, ndim=exc.ndim, kind=exc.kind, value=exc.value) from None
-    return write_placed(obj, path, force, unit=obj.unit if unit is None else unit_given(unit, str(path)),
+    return write_placed(obj, path, force, unit=obj.unit if unit is None else unit_given(unit, "write_volume"),
                         space=obj.space)
 
 
