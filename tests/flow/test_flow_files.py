@@ -347,19 +347,37 @@ def test_a_rename_that_fails_part_way_says_what_it_replaced(tmp_path, monkeypatc
     assert not [f for f in out.iterdir() if f.name.startswith(".")]  # the staging directory is gone
 
 
+def _entries(path: Path) -> dict:
+    """What a step entry holds, file by file (a link: where it leads; a
+    store: each file's bytes by its path inside)."""
+    if path.is_symlink():
+        return {"link": str(path.readlink())}
+    if path.is_dir():
+        return {str(f.relative_to(path)): f.read_bytes() for f in sorted(path.rglob("*")) if f.is_file()}
+    return {"": path.read_bytes()}
+
+
+@pytest.mark.parametrize("fails", ["rename", "rename and back", "removal", "interrupt"])
 @pytest.mark.parametrize("kind,name", [("link", "step_000.ply"), ("store", "step_001.zarr")])
-def test_a_rename_that_fails_after_the_previous_entry_went_says_it_went(tmp_path, monkeypatch, kind, name):
-    """A link or a step store at a step's name goes before the rename that
-    puts this run's file there; that rename failing (an I/O error) said
-    "the previous run's files in the directory are unchanged" (a link) or
-    "could not remove the previous run's step store" (a store that was
-    removed whole). The line now says that the previous entry was removed
-    and that nothing is at its name; a link's target stays."""
+def test_a_step_entry_replaced_part_way_is_kept_and_said(tmp_path, monkeypatch, kind, name, fails):
+    """A link or a step store at a step's name was removed before the
+    rename that puts this run's entry there; that rename failing (an I/O
+    error) lost the previous run's entry ("no NAME is there now"). It is
+    moved aside now, and back where this run's is not put in its place:
+    the previous entry is as it was, whole (a link leading to the user's
+    file, a store's every file), and the line says so; where the move back
+    fails too, the line names the hidden name that holds it; where the
+    moved-aside entry cannot be removed, this run's is in place and the
+    line names what is left."""
     import os
+
+    from isoflow.flow import files
 
     v = np.zeros((8, 8, 8), bool)
     v[2:6, 2:6, 2:6] = True
     np.save(tmp_path / "v.npy", v)
+    v[2:6, 2:6, 6] = True  # this run's: other step files than the previous run's
+    np.save(tmp_path / "w.npy", v)
     out = tmp_path / "run"
     extra = ["--volumes", ".zarr"] if kind == "store" else []
     assert run("flow", tmp_path / "v.npy", "--steps", "1", "--out", out, "--no-check", *extra)[0] == 0
@@ -368,31 +386,48 @@ def test_a_rename_that_fails_after_the_previous_entry_went_says_it_went(tmp_path
         (out / name).rename(mine)
         (out / name).symlink_to(mine)
     assert (out / name).is_symlink() or (out / name).is_dir()
-    before = {f.name: f.read_bytes() for f in out.iterdir() if f.is_file() and not f.is_symlink()}
-    real = os.replace
+    previous, theirs = _entries(out / name), mine.read_bytes() if kind == "link" else None
+    real_replace, real_remove = os.replace, files.remove_entry
 
     def failing(src, dst, *a, **k):
-        if Path(dst) == out / name:
+        staged = Path(src).name == name and Path(src).parent != out  # this run's entry, from the staging directory
+        if Path(dst) == out / name and staged and fails == "interrupt":  # Ctrl-C with the previous entry aside
+            raise KeyboardInterrupt
+        if Path(dst) == out / name and (staged or fails == "rename and back"):
             raise OSError(5, "Input/output error", str(dst))
-        return real(src, dst, *a, **k)
+        return real_replace(src, dst, *a, **k)
 
-    monkeypatch.setattr(os, "replace", failing)
-    rc, _, err = run("flow", tmp_path / "v.npy", "--steps", "1", "--out", out, "--force", "--no-check", *extra)
-    monkeypatch.setattr(os, "replace", real)
-    assert rc == 2 and len(err.strip().splitlines()) == 1, err
-    assert not (out / name).exists() and not (out / name).is_symlink()  # the previous entry is gone
-    assert f"the previous run's {name} (a {'link' if kind == 'link' else 'step store'}" in err
-    assert "was removed, and this run's was not put in its place" in err and "could not remove" not in err
-    assert "files in the directory are unchanged" not in err
+    def unremovable(path):
+        if path.parent == out and path.name.startswith(f".{name.split('.')[0]}"):  # the moved-aside entry
+            raise OSError(13, "Permission denied", str(path))
+        return real_remove(path)
+
+    with monkeypatch.context() as m:
+        m.setattr(os, "replace", failing) if fails != "removal" else m.setattr(files, "remove_entry", unremovable)
+        rc, _, err = run("flow", tmp_path / "w.npy", "--steps", "1", "--out", out, "--force", "--no-check", *extra)
+    assert rc == (130 if fails == "interrupt" else 2) and len(err.strip().splitlines()) == 1, err
+    assert "Traceback" not in err
+    hidden = [p for p in out.iterdir() if p.name.startswith(".")]
     if kind == "link":
-        assert mine.is_file()  # what the link led to is the user's
-    after = {f.name: f.read_bytes() for f in out.iterdir() if f.is_file()}
-    if name == "step_000.ply":  # the first rename: the previous run's other files are as they were
-        assert after == {n: b for n, b in before.items() if n != name}
-        assert err.strip().endswith("the previous run's other files are unchanged: run the flow again")
-    else:  # step_000's store and surface went in first
-        assert "2 of this run's" in err and "files of both runs" in err
-    assert not [f for f in out.iterdir() if f.name.startswith(".")]  # the staging directory is gone
+        assert mine.read_bytes() == theirs  # what the link led to is the user's, whatever came
+    if fails in ("rename", "interrupt"):
+        assert _entries(out / name) == previous and not hidden
+        if name == "step_000.ply":  # the first rename: the whole previous run is as it was
+            assert err.strip().endswith("the previous run's files in the directory are unchanged"), err
+        else:  # step_000's store and surface went in first
+            assert "2 of this run's" in err and f"the previous run's {name} is as it was" in err, err
+        said = "interrupted while putting the run's files in place" if fails == "interrupt" else \
+            "could not put it in place (Input/output error)"
+        assert said in err and "moved aside" not in err, err
+    elif fails == "rename and back":  # the previous entry whole at the hidden name the line gives
+        assert not os.path.lexists(out / name) and len(hidden) == 1 and _entries(hidden[0]) == previous
+        assert f"the previous run's {name} (a {'link' if kind == 'link' else 'step store'}" in err, err
+        assert f"was moved aside as {hidden[0].name} to make room and could not be moved back" in err, err
+    else:  # this run's entry in place, the previous one left beside it
+        assert len(hidden) == 1 and _entries(hidden[0]) == previous and _entries(out / name) != previous
+        assert f"could not remove the previous run's {'link' if kind == 'link' else 'step store'} (Permission " \
+               f"denied); the previous run's {name} is left beside it as {hidden[0].name}" in err, err
+    assert not [p for p in hidden if "run" in p.name]  # the staging directory is gone
 
 
 def test_a_second_interrupt_while_the_previous_run_goes_names_what_is_left(tmp_path, capsys, monkeypatch):

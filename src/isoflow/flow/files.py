@@ -31,6 +31,7 @@ from ..digital.surface import boundary_mesh
 from ..errors import IsoflowError, some_of, warn
 from ..mesh import export
 from ..mesh.outputs import (
+    aside_name,
     atomic_write,
     check_writable_dir,
     file_suffix,
@@ -588,17 +589,21 @@ class FlowWriter:
         new = set(self.staged)
         with self._named():  # a signal a library swallowed: the previous run stays
             interrupted_by_signal()
-        done, target, previous = 0, self.out, None
+        target, previous, aside = self.out, None, None
         try:
             for name in self.staged:
                 target = self.out / name
                 # a rename takes neither a link of a step store's name, nor a zarr step volume (a directory),
-                # nor a file where a store is staged: each goes first (what a link leads to is kept)
+                # nor a file where a store is staged: each is moved aside first (a rename, at once), and back
+                # where this run's is not put in its place: a failed rename leaves the previous run's entry whole
                 if target.is_symlink() or target.is_dir() or target.exists() and (self.stage / name).is_dir():
                     previous = "link" if target.is_symlink() else "step store" if target.is_dir() else "file"
-                    remove_entry(target)
+                    aside = aside_name(target)
+                    os.replace(target, aside)
                 os.replace(self.stage / name, target)
-                done, previous = done + 1, None
+                if aside is not None:
+                    remove_entry(aside)  # what a link led to is kept: it is the user's
+                previous, aside = None, None
             self.in_place = True
             target = self.out
             self.earlier = [old for old in _run_names(self.out)
@@ -609,11 +614,25 @@ class FlowWriter:
                 # a step name that is a link goes as the step file it stands for; what it names is the user's
                 remove_entry(old)
         except (OSError, KeyboardInterrupt) as exc:
-            line = self._commit_left(target, exc, done, previous)
+            line = self._commit_left(target, exc, previous, aside, self._put_back(target, aside))
             raise (KeyboardInterrupt if isinstance(exc, KeyboardInterrupt) else IsoflowError)(line) from None
         finally:
             shutil.rmtree(self.stage, ignore_errors=True)
         return [self.out / name for name in self.staged]
+
+    def _put_back(self, target: Path, aside: Path | None) -> bool | OSError:
+        """Rename the previous run's entry moved ``aside`` back to ``target``
+        where this run's was not put there: True where it was, False where
+        there was none to move back (not moved yet, or this run's entry is
+        in its place), the error of the rename where it failed (the entry
+        is then at ``aside``)."""
+        if aside is None or not os.path.lexists(aside) or os.path.lexists(target):
+            return False
+        try:
+            os.replace(aside, target)
+        except OSError as exc:
+            return exc
+        return True
 
     def _earlier_left(self) -> str:
         """What is left of the previous run's files that this run does not
@@ -633,44 +652,51 @@ class FlowWriter:
                 f"{len(left)} {'is' if len(left) == 1 else 'are'} left beside them "
                 f"({some_of(sorted(p.name for p in left))})")
 
-    def _commit_left(self, target: Path, exc: BaseException, done: int, previous: str | None) -> str:
+    def _commit_left(self, target: Path, exc: BaseException, previous: str | None, aside: Path | None,
+                     back: bool | OSError) -> str:
         """The line of a failure (or an interrupt) while :meth:`_commit` put
-        ``done`` of the staged files in place, at ``target`` (``previous``:
-        the kind of the previous run's entry there, a link, a step store or
-        a file, that was being removed, or was removed, to make room for
-        this run's)."""
+        the staged files in place, at ``target`` (``previous``: the kind of
+        the previous run's entry there, a link, a step store or a file, to be
+        moved ``aside`` to make room for this run's; ``back``: whether it was
+        moved back, or the error that kept it at ``aside``)."""
         total = len(self.staged)
-        # the previous entry at the target: what its removal did, as the directory shows it now
-        gone = previous is not None and not (target.exists() or target.is_symlink())
-        partly = previous == "step store" and not gone
-        if isinstance(exc, OSError):
-            cause = exc.strerror or str(exc) or type(exc).__name__
-            what = f"could not remove the previous run's step store ({cause})" if partly else \
-                f"could not put it in place ({cause})" if done < total else f"could not finish the run ({cause})"
-        else:
+        # in place: the staged entries renamed out of the staging directory (an interrupt may come between a
+        # rename and its count)
+        done = sum(not os.path.lexists(self.stage / name) for name in self.staged)
+        placed = previous is not None and not os.path.lexists(self.stage / target.name)
+        left = aside is not None and os.path.lexists(aside)  # the previous entry at its hidden name, whole or not
+        cause = (exc.strerror or str(exc) or type(exc).__name__) if isinstance(exc, OSError) else ""
+        if isinstance(exc, KeyboardInterrupt):
             what = "interrupted after the run's files were put in place" if done == total else \
                 "interrupted while putting the run's files in place"
-        if done == total:  # stopped as the previous run's files that this one did not replace were removed
-            return f"{target}: {what}; this run's {total} files are in place{self._earlier_left()}"
-        if gone:  # the previous entry went to make room, and this run's copy goes with the staging directory
+        elif placed and left:
+            what = f"could not remove the previous run's {previous} ({cause})"
+        elif previous is not None and not placed and back is False:  # the previous entry did not move
+            what = f"could not move the previous run's {previous} aside to make room ({cause})"
+        else:
+            what = f"could not put it in place ({cause})" if done < total else f"could not finish the run ({cause})"
+        note = ""
+        if back is True and done:  # moved back: said outright, as the directory holds files of both runs
+            note = f"; the previous run's {target.name} is as it was"
+        elif placed and left:  # this run's entry is in place; the previous one's removal did not finish
+            some = ", whole or in part" if previous == "step store" else ""
+            note = f"; the previous run's {target.name} is left beside it as {aside.name}{some}: remove it"
+        elif left:  # moved aside, and the rename back failed: the previous run's entry is whole, at its hidden name
             kept = "; what it led to is kept" if previous == "link" else ""
-            removed = (f"the previous run's {target.name} (a {previous}{kept}) was removed, and this run's was not put "
-                       f"in its place and went with the staging directory: no {target.name} is there now")
-        if done == 0 and not (gone or partly):
+            why = f" ({back.strerror or back})" if isinstance(back, OSError) else ""
+            note = (f"; the previous run's {target.name} (a {previous}{kept}) was moved aside as {aside.name} to make "
+                    f"room and could not be moved back{why}: rename it {target.name} to have it back")
+        if done == total:  # stopped as the previous run's files that this one did not replace were removed
+            return f"{target}: {what}; this run's {total} files are in place{note}{self._earlier_left()}"
+        if done == 0 and not note:  # the previous entry is where it was (not moved, or moved back)
             return self.kept(f"{target}: {what}")
         if done == 0:
-            left = removed if gone else f"{target.name} of the previous run may be partly removed"
-            if self.had_files:
-                left += "; the previous run's other files are unchanged: run the flow again"
-            return f"{target}: {what}; {left}"
-        left = f"{done} of this run's {total} files were put in place before it, the rest were not"
-        if gone:
-            left += f"; {removed}"
-        elif partly:
-            left += f", and {target.name} of the previous run may be partly removed"
+            other = "; the previous run's other files are unchanged: run the flow again" if self.had_files else ""
+            return f"{target}: {what}{note}{other}"
+        said = f"{done} of this run's {total} files {'was' if done == 1 else 'were'} put in place, the rest were not"
         if self.had_files:
-            left += "; the directory holds files of both runs: run the flow again"
-        return f"{target}: {what}; {left}"
+            said += "; the directory holds files of both runs: run the flow again"
+        return f"{target}: {what}{note}; {said}"
 
     def _stop_checks(self) -> None:
         if self._pool is not None:

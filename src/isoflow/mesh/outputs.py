@@ -335,6 +335,43 @@ def temp_sibling(path: Path, directory: bool = False) -> Path:
     raise FileExistsError(errno.EEXIST, "no free temporary name", str(path))
 
 
+def aside_name(path: Path) -> Path:
+    """A free hidden name beside ``path`` (:func:`temp_sibling`'s form)
+    that an entry of ``path``'s name (a file, a link, a directory) is
+    renamed to, in the same directory and so at once, to make room for the
+    new one: where the new one's rename fails, the old one is renamed back
+    and is as it was. The name is not among the temporaries that the
+    command's end removes (:data:`MADE`): until it is removed on purpose it
+    holds the old output.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The entry to be replaced.
+
+    Returns
+    -------
+    pathlib.Path
+        A name beside ``path`` that no entry holds.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> store = Path(tempfile.mkdtemp()) / "step_001.zarr"
+    >>> (store / "c").mkdir(parents=True)
+    >>> old = aside_name(store)
+    >>> old.parent == store.parent, old.name.startswith(".step_001"), old.exists()
+    (True, True, False)
+    >>> os.replace(store, old); sorted(p.name for p in old.iterdir()), store.exists()
+    (['c'], False)
+    """
+    old = temp_sibling(path, directory=True)
+    old.rmdir()  # free for the rename of a file or a link as of a directory
+    if MADE is not None:
+        MADE.discard(old)
+    return old
+
+
 def remove_abandoned(path: str | os.PathLike) -> list[Path]:
     """Remove the temporary files and directories beside ``path`` that a
     writer killed outright left (SIGKILL, a crash, a power cut: no
@@ -884,10 +921,7 @@ def _replace(tmp: Path, path: Path, directory: bool) -> None:
         return
     # a directory cannot be renamed over a non-empty one: move the old one
     # aside, move the new one in, then delete the old one
-    old = temp_sibling(path, directory=True)
-    old.rmdir()
-    if MADE is not None:  # it is to hold the old output, which the command's end must not remove
-        MADE.discard(old)
+    old = aside_name(path)
     os.replace(path, old)
     try:
         os.replace(tmp, path)
