@@ -135,9 +135,12 @@ def surfaces_from_counts(vertices: np.ndarray, quarters: np.ndarray) -> list[dic
     faces = quarters // 4
     chi = vertices - faces
     order = np.lexsort((chi, -faces))
+    chi, faces = chi[order], faces[order]
+    # each column made Python ints at once: a noisy object has a million
+    # surfaces, three NumPy scalars apiece to read and convert otherwise
     return [
-        {"euler_characteristic": int(chi[c]), "genus": int(1 - chi[c] // 2), "faces": int(faces[c])}
-        for c in order
+        {"euler_characteristic": c, "genus": g, "faces": f}
+        for c, g, f in zip(chi.tolist(), (1 - chi // 2).tolist(), faces.tolist())
     ]
 
 
