@@ -483,6 +483,46 @@ def test_an_object_of_a_dask_array_has_its_voxels_whichever_scheduler_computes_i
         assert obj.voxels == 64 and not np.shares_memory(obj.volume, volume)
 
 
+def test_a_dask_label_image_is_read_into_one_array_block_by_block(tmp_path):
+    """A dask array that isoflow reads whole (write_labels, label_table,
+    ...) was read by numpy.asarray: dask holds every computed block, then
+    their concatenation, twice the image's bytes at the peak. Each block is
+    now written into one array as it is computed: the image and a few
+    blocks. The file written is the image, as numpy reads it back."""
+    dask = pytest.importorskip("dask")
+    da = pytest.importorskip("dask.array")
+    zarr = pytest.importorskip("zarr")
+    labels = np.zeros((128, 128, 128), np.uint8)
+    labels[10:60, 10:60, 10:60] = 1
+    labels[70:120, 5:100, 40:90] = 2
+    store = zarr.open_array(tmp_path / "labels.zarr", mode="w", shape=labels.shape, chunks=(32,) * 3, dtype=np.uint8)
+    store[:] = labels
+    lazy = da.from_zarr(tmp_path / "labels.zarr")  # each block read from its file when computed
+    isoflow.write_labels(lazy, tmp_path / "first.npy")  # the first computation imports the store's codecs
+    # each thread holds a block or two being read: two threads, whatever the machine's cores, for a bound that
+    # holds on any machine (every block and their concatenation was 2.1 times the image)
+    with dask.config.set(scheduler="threads", num_workers=2):
+        peak, _ = _peak_bytes(lambda: isoflow.write_labels(lazy, tmp_path / "labels.npy"))
+    assert peak < 1.5 * labels.nbytes, peak / labels.nbytes
+    assert np.array_equal(np.load(tmp_path / "labels.npy"), labels)
+
+
+@pytest.mark.parametrize("dtype", [bool, np.uint8, np.uint32, np.float64])
+@pytest.mark.parametrize(("shape", "chunks"), [((7, 11), (3, 4)), ((13, 5, 9), (4, 5, 2)), ((10, 3, 4), ((1, 6, 3), 2, 3))])
+def test_a_dask_array_read_block_by_block_holds_what_numpy_reads(shape, chunks, dtype):
+    # blocks that do not divide the shape, of uneven sizes, each in its place; whichever scheduler of threads runs them
+    dask = pytest.importorskip("dask")
+    da = pytest.importorskip("dask.array")
+    from isoflow.scale.arrays import as_array
+
+    values = (np.random.default_rng(7).random(shape) * 300).astype(dtype)
+    lazy = da.from_array(values, chunks=chunks).map_blocks(np.copy, dtype=dtype)  # blocks computed, not views
+    for scheduler in ("threads", "synchronous"):
+        with dask.config.set(scheduler=scheduler):
+            read = as_array(lazy)
+        assert read.dtype == values.dtype and np.array_equal(read, np.asarray(lazy)) and np.array_equal(read, values)
+
+
 class _Image:
     """An image class that hands ``np.asarray`` its own array, as an
     xarray DataArray of a NumPy array does."""

@@ -12,15 +12,19 @@ dispatched here, so the rest of the core names no library:
   ``cupyx.scipy.ndimage.label`` on a CuPy GPU; other libraries have no
   labelling, so their volume is copied to the host for that step alone.
 
-Anything that is not an array-API array (lists, dask arrays, NumPy itself) is
-read with ``numpy.asarray``; host volumes must hold 0/1 values (:func:`binary`).
+Anything that is not an array-API array (lists, NumPy itself) is read with
+``numpy.asarray``, a dask array block by block into one NumPy array
+(:func:`read_anew`); host volumes must hold 0/1 values (:func:`binary`).
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
+import itertools
 import os
 import sys
+import uuid
 from collections.abc import Mapping
 
 import numpy as np
@@ -88,6 +92,11 @@ def as_array(array, where: str = "volume") -> np.ndarray:
     in one line naming the argument: NumPy's own ``ValueError`` ("setting an
     array element with a sequence") names neither it nor the function.
 
+    A dask array is read by :func:`read_anew` where it can be: each block
+    is written into its place as it is computed, where ``numpy.asarray``
+    holds every block and then their concatenation (twice the array's
+    bytes at its peak).
+
     A masked array with masked elements is refused too: ``numpy.asarray``
     would read the values stored under the mask, which are missing data,
     as if they were valid. One with no masked element is read as its data.
@@ -129,6 +138,9 @@ def as_array(array, where: str = "volume") -> np.ndarray:
     refuse_masked(array, where)
     refuse_mapping(array, where)
     refuse_beyond_memory(array, where)
+    read = read_anew(array, where)
+    if read is not None:
+        return read
     try:
         return np.asarray(array)
     except ValueError as error:
@@ -144,6 +156,11 @@ def read_anew(array: object, where: str = "volume") -> np.ndarray | None:
     array that a dask task returns whole); None for anything else, and for
     a dask array of unknown chunk sizes or whose scheduler runs its tasks
     in other processes (which would write into copies of the array).
+
+    Each block is written into its place once computed and then let go,
+    a run of consecutive blocks a task (at most :data:`WRITE_TASKS`
+    tasks): the peak is the array and the blocks in flight, where
+    ``numpy.asarray`` holds every block and their concatenation.
 
     Parameters
     ----------
@@ -180,10 +197,52 @@ def read_anew(array: object, where: str = "volume") -> np.ndarray | None:
         return None
     refuse_beyond_memory(array, where)
     read = np.empty(shape, dtype=array.dtype)  # type: ignore[attr-defined]
-    # each chunk is written into its place as it is computed: no second
-    # array of the whole, as the concatenation of numpy.asarray makes
-    array.store(read, lock=False, scheduler=scheduler)  # type: ignore[attr-defined]
+    _write_blocks(array, read, scheduler)
     return read
+
+
+#: the most tasks that write a dask array's blocks into the array read
+#: (:func:`read_anew`), each a run of consecutive blocks: dask's ``store``
+#: schedules a task per block, which for thousands of small blocks costs
+#: more than copying them, and ``numpy.asarray`` one task for all, which
+#: holds every block until the last is computed
+WRITE_TASKS = 64
+
+
+def _write_blocks(array, read: np.ndarray, scheduler) -> None:
+    """Compute the dask ``array`` into ``read`` by the thread-based
+    ``scheduler``: each run of consecutive blocks is written into its
+    place by a task that depends on those blocks alone, so a block is let
+    go once written and no second array of the whole is held."""
+    keys = list(_flat(array.__dask_keys__()))
+    graph = dict(array.__dask_optimize__(array.__dask_graph__(), keys))
+    bounds = [np.cumsum((0,) + tuple(c)).tolist() for c in array.chunks]
+    places = [tuple(slice(b[i], b[i + 1]) for b, i in zip(bounds, index))
+              for index in np.ndindex(*array.numblocks)]
+    step = -(-len(keys) // WRITE_TASKS)
+    # a name of its own: the graph's keys are the array's, never this one
+    name = f"isoflow-write-{uuid.uuid4().hex}"
+    writes = []
+    for n, start in enumerate(range(0, len(keys), step)):
+        run = slice(start, start + step)
+        graph[(name, n)] = (functools.partial(_place, read, places[run]), *keys[run])
+        writes.append((name, n))
+    scheduler(graph, writes)
+
+
+def _place(read: np.ndarray, places: list[tuple[slice, ...]], *blocks) -> None:
+    """A write task's work: its blocks, given in order, written into
+    ``read`` at ``places``."""
+    for place, block in zip(places, blocks):
+        read[place] = block
+
+
+def _flat(keys):
+    """The keys of a dask array's nested lists (one level an axis), in
+    order."""
+    if isinstance(keys, list):
+        return itertools.chain.from_iterable(_flat(k) for k in keys)
+    return (keys,)
 
 
 def refuse_beyond_memory(array: object, where: str = "volume") -> None:
