@@ -272,6 +272,26 @@ def test_a_masked_array_with_no_masked_element_is_read_as_its_data(mask, tmp_pat
         isoflow.analyze(_masked(plain, (2, 2, 2)), 6)
 
 
+@pytest.mark.parametrize(("call", "where"), [
+    (lambda x: isoflow.label_table(x), "label_table: image"),
+    (lambda x: isoflow.analyze(x != 0), "analyze: obj"),
+    (lambda x: isoflow.DigitalObject(x != 0), "DigitalObject volume"),
+])
+def test_a_dask_array_of_masked_blocks_with_masked_elements_is_refused(call, where):
+    """A dask array of masked blocks (dask.array.ma) was read with the
+    values stored under its mask: label 2, wholly masked, got a row."""
+    da = pytest.importorskip("dask.array")
+    labels = _labels()
+    lazy = da.ma.masked_equal(da.from_array(labels, chunks=5), 2)  # label 2 masked, 25 elements in 4 blocks
+    with pytest.raises(IsoflowError, match=rf"^{re.escape(where)}: a dask array of masked blocks, the block at "
+                                           r"\(\d+, \d+, \d+\) with \d+ masked elements?; pass dask.array.ma.filled"):
+        call(lazy)
+    # none masked: read as its data, as NumPy's own masked array is
+    unmasked = da.ma.masked_equal(da.from_array(labels, chunks=5), 7)
+    assert isoflow.label_table(unmasked)["label"].tolist() == [1, 2]
+    assert isoflow.analyze(unmasked != 0) == isoflow.analyze(labels != 0)
+
+
 def _box():
     import trimesh
 

@@ -197,7 +197,7 @@ def read_anew(array: object, where: str = "volume") -> np.ndarray | None:
         return None
     refuse_beyond_memory(array, where)
     read = np.empty(shape, dtype=array.dtype)  # type: ignore[attr-defined]
-    _write_blocks(array, read, scheduler)
+    _write_blocks(array, read, scheduler, where)
     return read
 
 
@@ -209,7 +209,7 @@ def read_anew(array: object, where: str = "volume") -> np.ndarray | None:
 WRITE_TASKS = 64
 
 
-def _write_blocks(array, read: np.ndarray, scheduler) -> None:
+def _write_blocks(array, read: np.ndarray, scheduler, where: str) -> None:
     """Compute the dask ``array`` into ``read`` by the thread-based
     ``scheduler``: each run of consecutive blocks is written into its
     place by a task that depends on those blocks alone, so a block is let
@@ -225,15 +225,25 @@ def _write_blocks(array, read: np.ndarray, scheduler) -> None:
     writes = []
     for n, start in enumerate(range(0, len(keys), step)):
         run = slice(start, start + step)
-        graph[(name, n)] = (functools.partial(_place, read, places[run]), *keys[run])
+        graph[(name, n)] = (functools.partial(_place, read, places[run], where), *keys[run])
         writes.append((name, n))
     scheduler(graph, writes)
 
 
-def _place(read: np.ndarray, places: list[tuple[slice, ...]], *blocks) -> None:
+def _place(read: np.ndarray, places: list[tuple[slice, ...]], where: str, *blocks) -> None:
     """A write task's work: its blocks, given in order, written into
-    ``read`` at ``places``."""
+    ``read`` at ``places``; a block with masked elements refused (a dask
+    array of masked blocks, ``dask.array.ma``), as a masked NumPy array
+    is (:func:`refuse_masked`): writing it would keep the values stored
+    under its mask."""
     for place, block in zip(places, blocks):
+        masked = int(np.ma.count_masked(block)) if is_masked_array(block) else 0
+        if masked:
+            corner = tuple(s.start for s in place)
+            raise IsoflowError(
+                f"{where}: a dask array of masked blocks, the block at {corner} with {counted(masked, 'masked element')}; "
+                "pass dask.array.ma.filled(a, 0) to read them as 0 (background), or dask.array.ma.getdata(a) to use "
+                "the values stored under the mask")
         read[place] = block
 
 
