@@ -58,10 +58,11 @@ def test_each_labels_part_is_its_boxs_mesh(rng, monkeypatch, method, conn):
 
 @pytest.mark.parametrize("dtype", ["u1", "i2", "u4", "i8", "u8", ">u2"])
 def test_masks_of_every_integer_type_are_the_labels_voxels(rng, monkeypatch, dtype):
-    """Each label's mask, as the batch's one compiled pass (native types)
-    or NumPy (a big-endian image) lays it, is ``image[box] == label`` (of
-    values near the type's top too, where a conversion would be off by
-    one)."""
+    """Each label's mask, as the batch's one compiled pass lays it (a
+    big-endian image's too: values compared as unsigned integers of their
+    width), is
+    ``image[box] == label`` (of values near the type's top too, where a
+    conversion would be off by one)."""
     monkeypatch.setattr(lm, "BATCH_VOXELS", 400)
     top = np.iinfo(np.dtype(dtype)).max
     values = np.array([0, 1, 2, top - 1, top], dtype=np.dtype(dtype).newbyteorder("="))

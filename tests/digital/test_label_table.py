@@ -128,7 +128,7 @@ def test_the_passes_are_compiled_once_for_every_integer_width(rng):
     for name in ("_vertex_rows", "_slab_runs", "_join_seam", "_number_runs", "_count_roots"):
         assert len(getattr(pieces, name).signatures) == 1, (name, getattr(pieces, name).signatures)
     # called from compiled passes only: compiled with them, none loaded from numba's cache
-    for name in ("_change_bits", "_equal_bits", "_join_rows"):
+    for name in ("_change_bits", "_equal_bits", "_join_rows", "_join_row", "_into"):
         assert len(getattr(pieces, name).signatures) <= 1, (name, getattr(pieces, name).signatures)
 
 

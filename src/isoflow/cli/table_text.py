@@ -229,12 +229,13 @@ def _cells(column: np.ndarray, missing: str, joined: str, booleans: tuple[str, s
     if column.dtype.kind in "iu":
         from ..scale.text_rows import integer_cells  # numba: not for a command without a table
 
-        # two compiled kinds: uint64, and int64, which holds every narrower integer
-        kind = np.uint64 if column.dtype == np.uint64 else np.int64
+        # uint64, or int64 (which holds every narrower integer) seen as uint64: one compile for both
+        signed = column.dtype != np.uint64
+        kind = np.int64 if signed else np.uint64
         width = max(len(str(column.min())), len(str(column.max()))) if len(column) else 1
 
         def integers(lo: int, hi: int, chars: np.ndarray, lengths: np.ndarray) -> None:
-            integer_cells(np.ascontiguousarray(column[lo:hi], kind), chars, lengths)
+            integer_cells(np.ascontiguousarray(column[lo:hi], kind).view(np.uint64), signed, chars, lengths)
 
         return width, integers
     if column.dtype.kind == "f":
@@ -318,6 +319,7 @@ def _rows(columns: list, lo: int, hi: int, before: list[bytes], held: threading.
     ``held`` (new ones where None); the text's is new, as the caller holds
     it while the next block is made (freed blocks of its size come back
     from the allocator, not as pages touched anew)."""
+    from ..scale.compiled import read_only_view
     from ..scale.text_rows import join_cells
 
     held = threading.local() if held is None else held
@@ -330,7 +332,8 @@ def _rows(columns: list, lo: int, hi: int, before: list[bytes], held: threading.
         write(lo, hi, cells[starts[c]:starts[c] + width * n].reshape(n, width), lengths[c])
     seps = np.frombuffer(b"".join(before), np.uint8)
     out = np.empty(int(lengths.sum()) + n * len(seps), np.uint8)
-    size = join_cells(cells, starts, widths, lengths, seps, np.cumsum([len(b) for b in before]), out)
+    # both read-only, as seps (a view of bytes) is anyway: one compile
+    size = join_cells(read_only_view(cells), starts, widths, lengths, seps, np.cumsum([len(b) for b in before]), out)
     return out[:size]
 
 

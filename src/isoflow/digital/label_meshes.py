@@ -169,10 +169,11 @@ def _batch(image, labels, lo, extent, rows: list[int], shape: tuple[int, int, in
     (each box, then an empty layer), meshed once and cut apart."""
     vol = np.zeros(shape, bool)
     starts = np.concatenate([[0], np.cumsum(extent[rows, 0] + 1)])
-    if method == "compiled" and image.dtype.isnative and image.dtype.kind in "iu":  # one pass for every box
-        from ..scale.box_masks import box_masks
+    if method == "compiled" and image.dtype.kind in "iu":  # one pass for every box
+        from ..scale.box_masks import as_unsigned, box_masks
 
-        box_masks(image, np.asarray(labels[rows], image.dtype), lo[rows], extent[rows], starts, vol)
+        box_masks(as_unsigned(image), as_unsigned(np.asarray(labels[rows], image.dtype)), lo[rows], extent[rows],
+                  starts, vol)
     else:
         for s, t in enumerate(rows):
             a, e, x = lo[t], extent[t], starts[s]

@@ -42,6 +42,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import IsoflowError
+from ..scale.compiled import read_only_view
 from ..scale.jit import njit
 from .readers import Mesh, triangulate, words_per_line
 
@@ -236,7 +237,7 @@ def _binary(body: bytes, order: str, elements: list[Element], where: str) -> tup
     """The coordinates, corners and face sizes of a binary body, its
     elements read in the header's order up to the vertices and faces
     (bytes after them ignored)."""
-    buf = np.frombuffer(body, np.uint8)
+    buf = read_only_view(np.frombuffer(body, np.uint8))  # bytes or a bytearray: one compile for both
     got: dict[str, dict] = {}
     at = 0
     for element in elements:
@@ -489,7 +490,7 @@ def _scan_binary(buf, at, lists, sizes, counts, signed, big, want, places, lengt
     --------
     Two rows of a uchar count and int16 items, big-endian: [7], [8, 9].
 
-    >>> buf = np.array([1, 0, 7, 2, 0, 8, 0, 9], np.uint8)
+    >>> buf = np.frombuffer(bytes([1, 0, 7, 2, 0, 8, 0, 9]), np.uint8)  # read-only, as the reader hands it
     >>> places, lengths, status = np.zeros((2, 1), np.int64), np.zeros(2, np.int64), np.zeros(3, np.int64)
     >>> one = np.ones(1, np.bool_)
     >>> _scan_binary(buf, 0, one, np.array([2]), np.array([1]), ~one, True, np.array([0]), places, lengths, status)

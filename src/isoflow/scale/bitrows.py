@@ -20,7 +20,7 @@ from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
 
-from .compiled import run, slabs, thread_count
+from .compiled import read_only_view, run, slabs, thread_count
 from .jit import njit
 
 
@@ -124,7 +124,8 @@ def pack(volume: np.ndarray):
     + 1)``: the last row is clear, for rows outside the array), and for the
     runs and for the gaps where each row's start in their C-order numbering
     (int64, two more than rows: the clear row has none)."""
-    v = np.ascontiguousarray(volume, dtype=bool).view(np.uint8)
+    # read-only whether or not the volume is: one compile for both
+    v = read_only_view(np.ascontiguousarray(volume, dtype=bool).view(np.uint8))
     nx, ny, nz = v.shape
     bits = np.empty((nx * ny + 1, nz // 64 + 1), np.uint64)
     bits[-1] = 0

@@ -119,6 +119,28 @@ def note_compile() -> None:
         logging.getLogger("isoflow").info(COMPILE_NOTE)
 
 
+def read_only_view(array: np.ndarray) -> np.ndarray:
+    """A read-only view of ``array`` (no copy), for a compiled pass that
+    only reads it.
+
+    numba types a read-only array apart from a writeable one, so a pass
+    handed both (a volume from ``np.load(mmap_mode="r")`` or a view of
+    bytes, and one the program made) is compiled twice, a first wait of
+    seconds each; handed this view always, it is compiled once.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> a = np.arange(3)
+    >>> view = read_only_view(a)
+    >>> view.flags.writeable, a.flags.writeable, view.base is a
+    (False, True, True)
+    """
+    view = array.view()
+    view.flags.writeable = False
+    return view
+
+
 @cache
 def have_numba() -> bool:
     """numba is installed (found without importing it: that is the slow part)."""

@@ -41,7 +41,7 @@ from __future__ import annotations
 import numpy as np
 
 from .bitrows import around, configuration, octant_planes, popcount, trailing_zeros, word
-from .compiled import run, slabs, thread_count
+from .compiled import read_only_view, run, slabs, thread_count
 from .jit import njit
 
 #: bits of the table over configurations (:func:`isoflow.flow.bitflow.step_table`)
@@ -301,7 +301,7 @@ def moves3_layers(bits: np.ndarray, shape: tuple[int, int, int], table: np.ndarr
     neg = np.zeros((rows, nwords), np.uint64)
     pany_x = np.zeros((rows, nwords), np.uint64)
     pboth_x = np.zeros((rows, nwords), np.uint64)
-    table = np.ascontiguousarray(table, np.int64)
+    table = read_only_view(np.ascontiguousarray(table, np.int64))  # one compile, a writeable table or not
     threads = thread_count((last - first) * (ny + 1) * (nz + 1))
     parts = [(first + a, first + b) for a, b in slabs(last - first, threads)]
     waits = np.zeros((len(parts), ny + 1), np.bool_)

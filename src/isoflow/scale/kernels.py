@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .compiled import run, slabs, thread_count
+from .compiled import read_only_view, run, slabs, thread_count
 from .memory import check_fits
 
 #: bytes per run held by the union-find: start, end and parent (int32)
@@ -317,7 +317,7 @@ def volume_view(volume: np.ndarray) -> np.ndarray:
 def histogram3d(volume: np.ndarray) -> np.ndarray:
     """The 256 configuration counts of a 3D volume (same as
     ``np.bincount(configurations(volume).ravel(), minlength=256)``)."""
-    v = volume_view(volume)
+    v = read_only_view(volume_view(volume))  # one compile, whether or not the volume is writeable
     parts = slabs(v.shape[0] + 1, thread_count(v.size))
     hists = [np.zeros(256, np.int64) for _ in parts]  # one per thread
     run([(_hist_rows, v, a, b, h) for (a, b), h in zip(parts, hists)])
@@ -328,6 +328,7 @@ def object_runs(v: np.ndarray):
     """Runs of True along the last axis of a 3D uint8 array: row offsets
     (int64, one more than rows), starts and ends (int32); runs numbered row
     by row in C order."""
+    v = read_only_view(v)  # one compile, whether or not the volume is writeable
     counts = np.zeros(v.shape[0] * v.shape[1] + 1, dtype=np.int64)
     parts = slabs(v.shape[0], thread_count(v.size))
     run([(_count_runs_rows, v, counts, a, b) for a, b in parts])

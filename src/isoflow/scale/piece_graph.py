@@ -366,11 +366,16 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
     return tuple(np.concatenate([f[k] for f in found]) for k in range(5))
 
 
-@njit(cache=True, nogil=True)
-def add_by_label(of, counts, sums, features, doubled, out_counts, out_sums, out_features, out_doubled):
+def add_by_label(of: np.ndarray, counts: np.ndarray, sums: np.ndarray, features: np.ndarray, doubled: np.ndarray,
+                 out_counts: np.ndarray, out_sums: np.ndarray, out_features: np.ndarray, out_doubled: np.ndarray) -> None:
     """Per label, the sums of its pieces' voxel counts, coordinate sums,
     features and doubled edges (``of[p]``: piece p's label), in one pass
     over the pieces.
+
+    ``out_features`` may be held in either order (a label table holds it
+    transposed, so that each feature is one run of memory): the compiled
+    pass reads it as its memory, one value after another, and steps of a
+    row and of a column, so that both orders share one compile.
 
     Examples
     --------
@@ -380,14 +385,26 @@ def add_by_label(of, counts, sums, features, doubled, out_counts, out_sums, out_
     >>> t[0].tolist(), t[2].ravel().tolist()
     ([3, 6], [1, 2])
     """
+    if not (out_features.flags.c_contiguous or out_features.flags.f_contiguous):
+        raise ValueError("add_by_label adds into features held in C or Fortran order")
+    flat = out_features.ravel(order="K")  # a view in either order
+    row, column = (step // out_features.itemsize for step in out_features.strides)
+    _add_by_label(of, counts, sums, features, doubled, out_counts, out_sums, flat, row, column, out_doubled)
+
+
+@njit(cache=True, nogil=True)
+def _add_by_label(of, counts, sums, features, doubled, out_counts, out_sums, out_features, row, column, out_doubled):
+    """:func:`add_by_label`, ``out_features`` as its memory: label l's
+    feature f at ``l * row + f * column``."""
     for p in range(len(of)):
         label = of[p]
         out_counts[label] += counts[p]
         out_doubled[label] += doubled[p]
         for d in range(3):
             out_sums[label, d] += sums[p, d]
+        at = label * row
         for f in range(features.shape[1]):
-            out_features[label, f] += features[p, f]
+            out_features[at + f * column] += features[p, f]
 
 
 @njit(cache=True, nogil=True)

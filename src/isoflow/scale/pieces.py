@@ -316,14 +316,19 @@ def _join_pair(flat, w, nz, starts, parent, first, used, row, b0, b1, row_b, bus
         _join_rows(flat, w, nz, starts, parent, first, used, row, b0, b1, row_b)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, _nrt=False)
 def _join_row(flat, w, ny, nz, x_lo, r, first, used, offsets, starts, parent, words, at, layer, row_bits, equal):
     """Join the runs [first, used) of row r = x * ny + y with those of rows
     (x, y - 1) and (x - 1, y) (within the slab). ``words`` holds where row
     r begins runs from bit ``at`` on; ``layer[y]`` holds where the busy
     rows of the layer before begin runs and takes row r's where it is
     busy (:data:`BITS_VOXELS_PER_RUN`); ``row_bits`` and ``equal``: scratch
-    of a row's words."""
+    of a row's words.
+
+    A call once per row, not compiled inline: :func:`_slab_runs` has two
+    call sites, each of which took its own copy of both ways of joining
+    (seconds of the first compile), and a row's joins cost more than the
+    call."""
     x, y = r // ny, r % ny
     row = r * nz
     busy = (used - first) * BITS_VOXELS_PER_RUN > nz
@@ -747,10 +752,15 @@ def _drain(old, new, top, base, below, keys, kind, sums, n, s0):
 NEAR_SLOTS = 1 << 10
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _into(pairs, key, how, pq, qp):
     """Add to the pair ``key`` in the pair table (as :func:`_add`, ``pq``
-    and ``qp`` as uint64). Returns 1 for a new pair."""
+    and ``qp`` as uint64). Returns 1 for a new pair.
+
+    A call, not compiled inline: :func:`_add` has five call sites in the
+    vertex rows' loop and reaches this twice from each, only where the
+    near cache misses, and ten copies of the table's probe loops were
+    seconds of the first compile."""
     s = _slot(pairs, key)
     new = np.int64(pairs[s, 0] == EMPTY)
     pairs[s, 0] = key

@@ -81,18 +81,19 @@ def _copy(src, a, n, out, at):
 
 
 @njit(cache=True, nogil=True)
-def integer_cells(values, chars, lengths):
-    """Integer ``values[r]`` (int64 or uint64) as its decimal digits,
-    ``-`` before them where negative, right-aligned in row ``r`` of
-    ``chars`` (uint8, wide enough: the longest ``str`` of a value); its
-    length in ``lengths[r]``. The sign and the magnitude are taken here,
-    value by value, so that a block of a column needs no arrays made for
-    them.
+def integer_cells(values, signed, chars, lengths):
+    """Integer ``values[r]`` as its decimal digits, ``-`` before them
+    where negative, right-aligned in row ``r`` of ``chars`` (uint8, wide
+    enough: the longest ``str`` of a value); its length in ``lengths[r]``.
+    ``values``: uint64, the bits of int64 values where ``signed`` (a view,
+    so that one compile serves both kinds of column). The sign and the
+    magnitude are taken here, value by value, so that a block of a column
+    needs no arrays made for them.
 
     Examples
     --------
     >>> chars, lengths = np.zeros((3, 20), np.uint8), np.zeros(3, np.int64)
-    >>> integer_cells(np.array([-7, 120, -(2**63)]), chars, lengths)
+    >>> integer_cells(np.array([-7, 120, -(2**63)]).view(np.uint64), True, chars, lengths)
     >>> [bytes(row[20 - n:]).decode() for row, n in zip(chars, lengths)]
     ['-7', '120', '-9223372036854775808']
     """
@@ -101,10 +102,10 @@ def integer_cells(values, chars, lengths):
     for r in range(len(values)):
         at = width
         v = values[r]
-        negative = v < v - v  # zero of the values' own type: no float comparison for uint64
+        negative = signed and v >> np.uint64(63) != 0  # the sign bit of an int64
         # uint64 with uint64 only (with an int numba would divide floats); the
         # magnitude of a negative int64 in two's complement, 2**63 for the least
-        m = np.uint64(0) - np.uint64(v) if negative else np.uint64(v)
+        m = np.uint64(0) - v if negative else v
         row = np.uint64(r)  # unsigned places, as in join_cells: no check for a negative index per digit
         while True:
             at -= 1
