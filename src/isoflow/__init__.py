@@ -18,6 +18,7 @@ _WHERE = {
     "analyze": ".digital.analysis",
     "Report": ".digital.report",
     "ClosedSurface": ".digital.report",
+    "ClosedSurfaces": ".digital.report",
     "analyze_chunked": ".digital.outofcore",
     "analyze_zarr": ".mesh.formats.omezarr",
     "label_table": ".digital.label_table",

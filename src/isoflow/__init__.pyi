@@ -45,6 +45,7 @@ from .digital.label_table import label_table as label_table
 from .digital.lattice import DigitalObject as DigitalObject
 from .digital.outofcore import analyze_chunked as analyze_chunked
 from .digital.report import ClosedSurface as ClosedSurface
+from .digital.report import ClosedSurfaces as ClosedSurfaces
 from .digital.report import Report as Report
 from .digital.surface import QuadMesh as QuadMesh
 from .digital.surface import boundary_mesh as boundary_mesh

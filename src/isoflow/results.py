@@ -13,7 +13,7 @@ names.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -41,7 +41,9 @@ _PLAIN = frozenset({int, float, str, bool, type(None)})
 
 def json_ready(value: Any) -> Any:
     """``value`` with results, tuples and NumPy scalars and arrays turned into
-    the dicts, lists and Python numbers that :func:`json.dumps` takes.
+    the dicts, lists and Python numbers that :func:`json.dumps` takes; a
+    sequence held as columns (a report's surfaces) by its own ``tolist``,
+    which gives plain dicts and numbers as an array's gives numbers.
 
     Examples
     --------
@@ -66,6 +68,9 @@ def json_ready(value: Any) -> Any:
         return {f.name: json_ready(getattr(value, f.name)) for f in dataclasses.fields(value)}
     if isinstance(value, Mapping):
         return {str(k): json_ready(v) for k, v in value.items()}
+    tolist = getattr(value, "tolist", None) if isinstance(value, Sequence) else None
+    if callable(tolist):
+        return tolist()
     if isinstance(value, (list, tuple)):
         return [json_ready(v) for v in value]
     if isinstance(value, np.ndarray):
@@ -297,9 +302,12 @@ def brief(value: Any) -> str:
     if isinstance(value, np.ndarray):
         with np.printoptions(threshold=2 * ARRAY_EDGE, edgeitems=ARRAY_EDGE):
             return repr(value)
-    if isinstance(value, (list, tuple)) and not hasattr(value, "_fields"):  # a named tuple reprs its names
+    # (a sequence of another type, as a report's surfaces held as columns,
+    # reprs as a list)
+    if isinstance(value, Sequence) and not isinstance(value, (str, bytes, bytearray, range)) \
+            and not hasattr(value, "_fields"):  # a named tuple reprs its names
         items = [brief(v) for v in value[:SHOWN_ITEMS]] + more(len(value))
-        return ("[{}]" if isinstance(value, list) else "({},)" if len(value) == 1 else "({})").format(", ".join(items))
+        return ("[{}]" if not isinstance(value, tuple) else "({},)" if len(value) == 1 else "({})").format(", ".join(items))
     if isinstance(value, dict):
         items = [f"{k!r}: {brief(v)}" for k, v in list(value.items())[:SHOWN_ITEMS]] + more(len(value))
         return "{" + ", ".join(items) + "}"

@@ -337,7 +337,7 @@ def format_surfaces(r: Report) -> list[str]:
         lines.append(f"  closed surfaces        not applicable in {r['dimension']}D (the boundary is {boundary})")
     if r.get("pinched_vertices"):
         said = f"  pinched vertices       {r['pinched_vertices']} (split in the mesh, joined by the connectivity)"
-        genera = sum(s["genus"] for s in r["surfaces"]) if r.surfaces is not None else None
+        genera = sum(r.genus) if r.genus is not None else None
         if genera is not None and genera != r["betti"][1]:
             # the surfaces' genus counts the sheets apart at a pinch, b1
             # counts the tunnels the connectivity makes through it

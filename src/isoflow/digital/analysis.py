@@ -221,7 +221,7 @@ def _analyze(obj, connectivity, surfaces: bool, method: Method, given: Place) ->
         out.update(surfaces=census["surfaces"], pinched_vertices=census["pinched_vertices"],
                    doubled_edges=census["doubled_edges"])
         # docs/mathematics.md: the split mesh has V - E + F = 2 chi + 2 p
-        assert sum(s["euler_characteristic"] for s in out["surfaces"]) == 2 * chi + 2 * census["pinched_vertices"]
+        assert out["surfaces"].columns()["euler_characteristic"].sum() == 2 * chi + 2 * census["pinched_vertices"]
     return out
 
 

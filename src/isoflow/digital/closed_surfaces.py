@@ -67,7 +67,7 @@ from ..scale.memory import check_fits
 from .configurations import configurations, empty_histogram
 from .connectivity import check_connectivity, resolve_connectivity
 from .measures import extent_of_rows
-from .report import SurfaceCensus
+from .report import ClosedSurfaces, SurfaceCensus
 from .surface import boundary_faces, doubled_spoke_lut, pinch_lut, sheet_lut, slot_octants
 
 #: connectivity -> (object adjacency, background adjacency) of the mesh's solid
@@ -126,22 +126,16 @@ def sweep_tables(connectivity: int = 6) -> tuple[np.ndarray, ...]:
     return nsheet, sheet_obj, sheet_bg, quarters, spokes, pinch
 
 
-def surfaces_from_counts(vertices: np.ndarray, quarters: np.ndarray) -> list[dict]:
+def surfaces_from_counts(vertices: np.ndarray, quarters: np.ndarray) -> ClosedSurfaces:
     """The report's surfaces from each pair's mesh vertices and quarter
-    faces, largest first."""
+    faces, largest first (most faces, then least Euler characteristic)."""
     vertices = np.asarray(vertices, np.int64)
     quarters = np.asarray(quarters, np.int64)
     assert (quarters % 4 == 0).all(), "every face has four corners"
     faces = quarters // 4
     chi = vertices - faces
     order = np.lexsort((chi, -faces))
-    chi, faces = chi[order], faces[order]
-    # each column made Python ints at once: a noisy object has a million
-    # surfaces, three NumPy scalars apiece to read and convert otherwise
-    return [
-        {"euler_characteristic": c, "genus": g, "faces": f}
-        for c, g, f in zip(chi.tolist(), (1 - chi // 2).tolist(), faces.tolist())
-    ]
+    return ClosedSurfaces(chi[order], faces[order])
 
 
 def closed_surfaces(volume: ArrayLike, connectivity: int | np.integer | None = 6, method: Method = "auto") -> SurfaceCensus:
@@ -501,7 +495,7 @@ def empty_census(shape: tuple[int, ...]) -> dict:
     >>> c["surfaces"], c["betti_counts"], int(c["hist"][0])
     ([], (0, 0), 9)
     """
-    return {"surfaces": [], "pinched_vertices": 0, "doubled_edges": 0, "hist": empty_histogram(shape),
+    return {"surfaces": ClosedSurfaces(), "pinched_vertices": 0, "doubled_edges": 0, "hist": empty_histogram(shape),
             "betti_counts": (0, 0), "extent": None}
 
 

@@ -246,7 +246,7 @@ def _surfaces(conn: int, chi: int, hist: np.ndarray, merged) -> dict:
     assert faces.sum() == boundary_faces(hist), "the surfaces' faces do not add up"
     found = surfaces_from_counts(vertices, 4 * faces)
     pinched = int(hist[pinch_lut(conn)].sum())
-    assert sum(s["euler_characteristic"] for s in found) == 2 * chi + 2 * pinched
+    assert found.columns()["euler_characteristic"].sum() == 2 * chi + 2 * pinched
     # a doubled edge whose ends two tasks count: its key twice among the loose ends
     _, seen = np.unique(np.concatenate([e for m in merged for e in m["loose"]]), return_counts=True)
     assert (seen <= 2).all(), "an edge has two ends"
