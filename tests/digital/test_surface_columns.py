@@ -58,6 +58,13 @@ OBJECTS = {
 }
 
 
+def found(sequence, value, start):
+    try:
+        return sequence.index(value, start)
+    except ValueError:
+        return None
+
+
 @pytest.mark.parametrize("name", sorted(OBJECTS))
 def test_the_surfaces_read_as_the_list_of_dicts(name, tmp_path):
     vol = OBJECTS[name]()
@@ -80,6 +87,12 @@ def test_the_surfaces_read_as_the_list_of_dicts(name, tmp_path):
     assert json.dumps(r.to_dict()["surfaces"]) == json.dumps(want)
     assert s + want == want + want == want + s and s + s == want + want
     assert want[0] in s and s.index(want[-1]) == want.index(want[-1])
+    # as the list counts and finds: a surface's dict, and nothing else, by value
+    for probe in (want[0], want[-1], changed[-1], {**want[0], "genus": want[0]["genus"] + 1}, "x", None):
+        assert s.count(probe) == want.count(probe) and (probe in s) == (probe in want)
+    assert found(s, want[-1], 1) == found(want, want[-1], 1) and found(s, want[0], -1) == found(want, want[0], -1)
+    with pytest.raises(ValueError):
+        s.index(changed[-1])
     for back in (pickle.loads(pickle.dumps(s)), copy.copy(s), copy.deepcopy(s)):
         assert back == want and type(back) is ClosedSurfaces
     table = s.columns()

@@ -158,6 +158,71 @@ class ClosedSurfaces(Sequence[ClosedSurface]):
         """
         return {"euler_characteristic": self._chi, "genus": read_only(1 - self._chi // 2), "faces": self._faces}
 
+    def _where(self, value: object) -> np.ndarray:
+        """The indices of the surfaces equal to ``value`` (a surface's
+        dict; nothing else equals one)."""
+        if not isinstance(value, Mapping) or set(value) != set(SURFACE_KEYS) or not all(
+                isinstance(value[k], (int, np.integer)) and not isinstance(value[k], bool) for k in SURFACE_KEYS):
+            return np.zeros(0, np.int64)
+        chi, faces, genus = (int(value[k]) for k in ("euler_characteristic", "faces", "genus"))
+        if genus != 1 - chi // 2:
+            return np.zeros(0, np.int64)
+        return np.flatnonzero((self._chi == chi) & (self._faces == faces))
+
+    def count(self, value: object) -> int:
+        """How many surfaces equal ``value``, as a list's ``count``.
+
+        Parameters
+        ----------
+        value : object
+            A :class:`ClosedSurface` dict (nothing else equals a surface).
+
+        Returns
+        -------
+        int
+
+        Examples
+        --------
+        >>> ClosedSurfaces([2, 2], [6, 6]).count({"euler_characteristic": 2, "genus": 0, "faces": 6})
+        2
+        """
+        return len(self._where(value))
+
+    def index(self, value: object, start: int = 0, stop: int | None = None) -> int:
+        """The first index of a surface equal to ``value`` from ``start``
+        on (before ``stop``), as a list's ``index``.
+
+        Parameters
+        ----------
+        value : object
+            A :class:`ClosedSurface` dict.
+        start, stop : int, optional
+            Where to look, as a slice's bounds.
+
+        Returns
+        -------
+        int
+
+        Raises
+        ------
+        ValueError
+            Where no surface there equals it.
+
+        Examples
+        --------
+        >>> ClosedSurfaces([0, 2], [48, 6]).index({"euler_characteristic": 2, "genus": 0, "faces": 6})
+        1
+        """
+        lo, hi, _ = slice(start, stop).indices(len(self))
+        found = self._where(value)
+        found = found[(found >= lo) & (found < hi)]
+        if not len(found):
+            raise ValueError(f"{value!r} is not among the surfaces")
+        return int(found[0])
+
+    def __contains__(self, value: object) -> bool:
+        return len(self._where(value)) > 0
+
     def tolist(self) -> list[ClosedSurface]:
         """The surfaces as a list of new dicts (what ``json.dumps`` takes).
 
