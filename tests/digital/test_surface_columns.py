@@ -9,14 +9,13 @@ import copy
 import gc
 import json
 import pickle
-import subprocess
-import sys
 import tracemalloc
 
 import numpy as np
 import pytest
 import trimesh
 from conftest import ball, torus
+from in_process import isoflow_here
 
 import isoflow
 from isoflow import ClosedSurfaces, Report, analyze, closed_surfaces, write_surface
@@ -147,10 +146,31 @@ def test_info_prints_the_surfaces_of_a_noisy_volume_as_the_list(tmp_path):
     vol = OBJECTS["noise"]()
     np.save(tmp_path / "v.npy", vol)
     want = trimesh_surfaces(vol, tmp_path)
-    run = [sys.executable, "-m", "isoflow", "info", str(tmp_path / "v.npy")]
-    got = json.loads(subprocess.run([*run, "--json"], capture_output=True, text=True, check=True).stdout)
+    printed = isoflow_here("info", tmp_path / "v.npy", "--json").stdout
+    got = json.loads(printed)
     assert got["surfaces"] == want
-    text = subprocess.run(run, capture_output=True, text=True, check=True).stdout
+    # the surfaces written from their columns, the rest by json: the text json.dumps writes of it all
+    assert printed == json.dumps(got) + "\n"
+    text = isoflow_here("info", tmp_path / "v.npy").stdout
     lines = [f"    #{i}: genus {d['genus']}, chi {d['euler_characteristic']}, {d['faces']} faces"
              for i, d in enumerate(want[:10])]
     assert f"  closed surfaces        {len(want)}\n" + "\n".join(lines) + f"\n    ... {len(want) - 10} more\n" in text
+
+
+def _one_voxel():
+    vol = np.zeros((3, 3, 3), bool)
+    vol[1, 1, 1] = True
+    return vol
+
+
+@pytest.mark.parametrize("vol, surfaces", [
+    (np.zeros((4, 4, 4), bool), []),
+    (_one_voxel(), [{"euler_characteristic": 2, "genus": 0, "faces": 6}]),  # a cube's six faces
+    (np.eye(5, dtype=bool), None),  # 2D: closed curves, no key
+], ids=["empty", "one voxel", "2d"])
+def test_info_json_of_no_one_or_no_surfaces_is_what_json_writes(vol, surfaces, tmp_path):
+    np.save(tmp_path / "v.npy", vol)
+    printed = isoflow_here("info", tmp_path / "v.npy", "--json").stdout
+    got = json.loads(printed)
+    assert printed == json.dumps(got) + "\n"
+    assert got.get("surfaces") == surfaces

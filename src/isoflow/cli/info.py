@@ -8,10 +8,12 @@ import dataclasses
 import json
 import math
 import threading
+import uuid
 from pathlib import Path
 
 from ..digital.report import Report
 from ..errors import IsoflowError, betti_words, coordinates, counted, path_text, terminal_text
+from ..results import json_ready
 from .inputs import (
     add_connectivity,
     add_input_arguments,
@@ -28,7 +30,7 @@ from .inputs import (
 )
 from .labels import add_labels_option, refuse_names_without_labels
 from .progress import progress_bar
-from .table_text import measure_text
+from .table_text import json_rows, measure_text
 
 
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
@@ -81,12 +83,37 @@ def cmd_info(args: argparse.Namespace) -> int:
     else:
         report, grid, placed = info_in_memory(args)
     if args.json:
-        print(json.dumps(finite_or_null({**report.to_dict(), **(placed or {}), **({"voxelised": grid} if grid else {}),
-                                         "input": path_text(args.input)})))
+        print(report_json(report, {**(placed or {}), **({"voxelised": grid} if grid else {}),
+                                   "input": path_text(args.input)}))
         return 0
     # escaped as a label's name is: a line break in it would split the report's first line
     print(format_info(report, terminal_text(args.input), grid, placed))
     return 0
+
+
+def report_json(report: Report, more: dict) -> str:
+    """What ``info --json`` prints: the report's keys, then ``more`` (the
+    input's), as ``json.dumps`` writes them, infinities as null
+    (:func:`finite_or_null`). The surfaces are written from their columns
+    (:func:`~isoflow.cli.table_text.json_rows`): a noisy object has a
+    million, which as dicts would be made only to be written.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from isoflow import analyze
+    >>> r = analyze(np.ones((2, 2, 2), bool))
+    >>> report_json(r, {"input": "cube.npy"}) == json.dumps({**r.to_dict(), "input": "cube.npy"})
+    True
+    """
+    surfaces = report.get("surfaces")
+    # a string no value holds, put where the surfaces go and replaced by their text
+    mark = f"surfaces-{uuid.uuid4().hex}"
+    fields = {k: (mark if k == "surfaces" else json_ready(report[k])) for k in report}
+    text = json.dumps(finite_or_null({**fields, **more}))
+    if surfaces is None:
+        return text
+    return text.replace(json.dumps(mark), "".join(json_rows(surfaces.columns())), 1)
 
 
 def calibration(obj, unit: str | None, dtype) -> dict:
