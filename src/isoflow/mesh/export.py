@@ -292,6 +292,9 @@ _PLY_TYPES = {"f4": "float", "u1": "uchar", "i1": "char", "i4": "int", "f8": "do
 def _size_groups(faces: np.ndarray):
     """Faces padded with -1, grouped by their number of vertices."""
     faces = np.asarray(faces, dtype=np.int64)
+    if faces.size and faces.min() >= 0:  # no padding (triangles, quads): one group, as it is, not copied
+        yield faces.shape[1], faces
+        return
     sizes = (faces >= 0).sum(axis=1) if faces.size else np.zeros(0, np.int64)
     for size in np.unique(sizes):
         rows = faces[sizes == size]
