@@ -125,8 +125,8 @@ def read_only_view(array: np.ndarray) -> np.ndarray:
 
     numba types a read-only array apart from a writeable one, so a pass
     handed both (a volume from ``np.load(mmap_mode="r")`` or a view of
-    bytes, and one the program made) is compiled twice, a first wait of
-    seconds each; handed this view always, it is compiled once.
+    bytes, and one the program made) is compiled twice, each compile a
+    wait on its first call; handed this view always, it is compiled once.
 
     Examples
     --------

@@ -326,9 +326,8 @@ def _join_row(flat, w, ny, nz, x_lo, r, first, used, offsets, starts, parent, wo
     of a row's words.
 
     A call once per row, not compiled inline: :func:`_slab_runs` has two
-    call sites, each of which took its own copy of both ways of joining
-    (seconds of the first compile), and a row's joins cost more than the
-    call."""
+    call sites, and inline each would hold a copy of both ways of joining
+    for numba to compile; a row's joins cost more than the call."""
     x, y = r // ny, r % ny
     row = r * nz
     busy = (used - first) * BITS_VOXELS_PER_RUN > nz
@@ -759,8 +758,8 @@ def _into(pairs, key, how, pq, qp):
 
     A call, not compiled inline: :func:`_add` has five call sites in the
     vertex rows' loop and reaches this twice from each, only where the
-    near cache misses, and ten copies of the table's probe loops were
-    seconds of the first compile."""
+    near cache misses; inline, the table's probe loops would be ten
+    copies for numba to compile."""
     s = _slot(pairs, key)
     new = np.int64(pairs[s, 0] == EMPTY)
     pairs[s, 0] = key
