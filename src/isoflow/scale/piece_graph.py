@@ -84,14 +84,71 @@ def _own_components(own, label, piece_label, local, parent, adj_start, adj_to, a
     return count
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _depth(piece, plo, phi, blo, bhi):
+    """How far a piece of the rest lies inside the label's box: the fewest
+    voxels from its box to a face of the label's (at least 1 for a piece
+    that is not open, :func:`_open`)."""
+    depth = plo[piece, 0] - blo[0]
+    for d in range(3):
+        depth = min(depth, plo[piece, d] - blo[d], bhi[d] - phi[piece, d])
+    return depth
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _push(heap, hkey, n, value, key):
+    """Add ``value`` with ``key`` to the binary heap of ``n`` entries
+    (least key on top); returns the new size."""
+    i = n
+    while i > 0:
+        up = (i - 1) >> 1
+        if hkey[up] <= key:
+            break
+        heap[i], hkey[i] = heap[up], hkey[up]
+        i = up
+    heap[i], hkey[i] = value, key
+    return n + 1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _pop(heap, hkey, n):
+    """Take the entry of least key off the heap of ``n`` entries: returns
+    it and the new size."""
+    top = heap[0]
+    n -= 1
+    value, key = heap[n], hkey[n]
+    i = 0
+    while True:
+        child = 2 * i + 1
+        if child >= n:
+            break
+        if child + 1 < n and hkey[child + 1] < hkey[child]:
+            child += 1
+        if hkey[child] >= key:
+            break
+        heap[i], hkey[i] = heap[child], hkey[child]
+        i = child
+    if n > 0:
+        heap[i], hkey[i] = value, key
+    return top, n
+
+
 @njit(cache=True, nogil=True, _nrt=False)
 def _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, kind, mark, stamp,
-                     comp, queue):
+                     comp, queue, heap, hkey):
     """Components of the rest of the image over edges of at most ``kind``
     that touch the label's pieces ``own`` by a face: ``comp[piece]`` (where
     ``stamp[piece] == mark``) is 0 for the outside's component and 1..m for
     the enclosed ones. Returns m. Compiled on its own, as
-    :func:`_own_components`."""
+    :func:`_own_components`.
+
+    Each walk stops at the first piece that reaches the label's box (or a
+    piece of the outside's component walked before), and goes nearest the
+    box's faces first (:func:`_depth`, a heap): the answer, outside or
+    enclosed, is the walk's whatever its order, and a label scattered over
+    the whole image (noise) has its box's faces only as far as the image's,
+    where a walk in rings around its start would cross most of the rest
+    for every label. ``queue`` lists the pieces a walk reached."""
     enclosed = 0
     for p in own:
         for e in range(adj_start[p], adj_start[p + 1]):
@@ -101,11 +158,11 @@ def _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj
             stamp[seed] = mark
             comp[seed] = -1
             queue[0] = seed
-            head, tail = 0, 1
+            tail = 1
             outside = _open(seed, plo, phi, blo, bhi)
-            while head < tail and not outside:
-                x = queue[head]
-                head += 1
+            waiting = 0 if outside else _push(heap, hkey, 0, seed, _depth(seed, plo, phi, blo, bhi))
+            while waiting > 0 and not outside:
+                x, waiting = _pop(heap, hkey, waiting)
                 for f in range(adj_start[x], adj_start[x + 1]):
                     y = adj_to[f]
                     if adj_kind[f] > kind or piece_label[y] == label:
@@ -122,6 +179,7 @@ def _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj
                     if _open(y, plo, phi, blo, bhi):
                         outside = True
                         break
+                    waiting = _push(heap, hkey, waiting, y, _depth(y, plo, phi, blo, bhi))
             if not outside:
                 enclosed += 1
             for t in range(tail):
@@ -259,7 +317,7 @@ def _own_parts(own, label, piece_label, local, parent, parent0, adj_start, adj_t
 
 @njit(cache=True, nogil=True, _nrt=False)
 def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n, adj_q,
-                obj_kind, b0_kind, bg_kind, cc_kind, local, stamp, comp, stamp2, comp2, queue, parent,
+                obj_kind, b0_kind, bg_kind, cc_kind, local, stamp, comp, stamp2, comp2, queue, heap, hkey, parent,
                 parent0, blo, bhi, key, verts, quarters, order, b0, b2, srow, schi, sfaces):
     """The loop of :func:`label_topology` over its rows, on scratch arrays
     (compiled without reference counting: nothing is allocated here).
@@ -286,14 +344,14 @@ def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, a
             m = 0  # nothing enclosed, and no piece stamped: _surfaces reads no component with m 0
         else:
             m = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, bg_kind,
-                                 r + 1, stamp, comp, queue)
+                                 r + 1, stamp, comp, queue, heap, hkey)
         if cc_kind == bg_kind or m == 0:
             # the rest's components over edges up to cc_kind (>= bg_kind) are unions of those up to bg_kind:
             # where each of these reaches the outside, so does each of those
             b2[r] = m
         else:
             b2[r] = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind,
-                                     cc_kind, r + 1, stamp2, comp2, queue)
+                                     cc_kind, r + 1, stamp2, comp2, queue, heap, hkey)
         if is_open and parts == 1:  # one component, nothing enclosed: every sheet is on one surface
             nsurf = _one_surface(sheet_sum, quarter_sum, r, srow, schi, sfaces, nsurf)
         else:
@@ -303,8 +361,9 @@ def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, a
 
 
 #: bytes per piece of a thread's scratch in :func:`label_topology` (a
-#: piece's place among its label's, two stamps, two components, the queue)
-TOPOLOGY_BYTES = 6 * 4
+#: piece's place among its label's, two stamps, two components, the walk's
+#: pieces, its heap and their keys)
+TOPOLOGY_BYTES = 8 * 4
 
 
 def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n, adj_q,
@@ -351,13 +410,14 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
         most = int(per_label[part].max(initial=0))
         own = int(sizes[part].max(initial=0))
         local, queue = np.zeros(npieces, np.int32), np.zeros(npieces, np.uint32)
+        heap, hkey = np.zeros(npieces, np.uint32), np.zeros(npieces, np.int32)
         parent, parent0 = np.zeros(own, np.int32), np.zeros(own, np.int32)  # per piece of one label
         stamps = [np.zeros(npieces if k < 2 or other else 1, np.int32) for k in range(4)]  # stamp, comp, stamp2, comp2
         small = [np.zeros(3, np.int64) for _ in range(2)] + [np.zeros(most, np.int64) for _ in range(4)]
         b0, b2 = np.zeros(len(part), np.int64), np.zeros(len(part), np.int64)
         surf = [np.empty(total, np.int64) for _ in range(3)]  # written up to the surfaces found, read no further
         nsurf = _label_loop(part, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n,
-                            adj_q, obj_kind, b0_kind, bg_kind, cc_kind, local, *stamps, queue, parent,
+                            adj_q, obj_kind, b0_kind, bg_kind, cc_kind, local, *stamps, queue, heap, hkey, parent,
                             parent0, *small, b0, b2, *surf)
         surf[0][:nsurf] += a  # rows of the whole
         return (b0, b2) + tuple(s[:nsurf] for s in surf)
