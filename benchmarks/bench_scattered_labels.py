@@ -1,0 +1,97 @@
+"""The label table of scattered labels (noise) against scikit-image's regionprops_table.
+
+    python benchmarks/bench_scattered_labels.py                    # 64^3, 96^3 and 128^3, 1,000 labels
+    python benchmarks/bench_scattered_labels.py --sizes 48 --repeat 1 --json ''   # a look
+
+Input (generated): ``np.random.default_rng(1).integers(0, labels, (n,)*3,
+dtype=np.uint32)``, every voxel a label drawn at random: each label is
+thousands of pieces spread over the whole image, its box the image's, the
+worst case of the label table's walks around a label (the grain maps of
+``bench_labels.py`` are the usual case).
+
+In process, the tools alternated, best of ``--repeat`` after one untimed
+call each: ``isoflow.label_table(image, 6)`` (every label's row, Betti
+numbers and surfaces) against ``regionprops_table(image, properties=
+("label", "area", "euler_number"))``; the Euler numbers are checked equal
+(at 6-connectivity, scikit-image's ``connectivity=1``) and the seconds and
+the call's peak memory beyond what the process held before it
+(``ru_maxrss`` after, less the resident memory before: bytes per voxel;
+true where the call's peak passes every earlier one) written
+to ``benchmarks/results/scattered_labels.json`` (``--json``) and a
+Markdown table on stdout (give the sizes smallest first).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import resource
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def peak_bytes() -> int:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
+def resident_bytes() -> int:
+    """The process's resident memory now (Linux)."""
+    return int(Path("/proc/self/statm").read_text().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+
+def main(argv=None) -> int:
+    from skimage.measure import euler_number, regionprops_table
+
+    import isoflow
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[64, 96, 128])
+    ap.add_argument("--labels", type=int, default=1000)
+    ap.add_argument("--repeat", type=int, default=2)
+    ap.add_argument("--json", default=str(ROOT / "benchmarks" / "results" / "scattered_labels.json"))
+    args = ap.parse_args(argv)
+    lines = ["| image | labels | isoflow label_table (s) | regionprops_table (s) | isoflow peak growth (B/voxel) |",
+             "|---|---|---|---|---|"]
+    results = []
+    # numba's passes loaded (a small scattered image takes the compiled ones)
+    isoflow.label_table(np.random.default_rng(0).integers(0, 50, (24,) * 3, dtype=np.uint32), 6)
+    for n in args.sizes:
+        image = np.random.default_rng(1).integers(0, args.labels, (n,) * 3, dtype=np.uint32)
+        before = resident_bytes()
+        table = isoflow.label_table(image, 6)
+        grown = peak_bytes() - before
+        first = int(table["label"][0])
+        assert table["euler_characteristic"][0] == euler_number(image == first, connectivity=1)
+        tools = {"isoflow": lambda x=image: isoflow.label_table(x, 6),
+                 "skimage": lambda x=image: regionprops_table(x, properties=("label", "area", "euler_number"))}
+        best = dict.fromkeys(tools, float("inf"))
+        for _ in range(args.repeat):
+            for name, run in tools.items():
+                start = time.perf_counter()
+                run()
+                best[name] = min(best[name], time.perf_counter() - start)
+        rec = {"size": n, "labels": len(table["label"]), "isoflow_seconds": best["isoflow"],
+               "skimage_seconds": best["skimage"], "isoflow_peak_growth_bytes_per_voxel": grown / image.size}
+        results.append(rec)
+        lines.append(f"| {n}^3 | {rec['labels']:,} | {best['isoflow']:.2f} | {best['skimage']:.2f} | "
+                     f"{rec['isoflow_peak_growth_bytes_per_voxel']:.0f} |")
+        print(lines[-1], file=sys.stderr)
+    print("\n".join(lines))
+    if args.json:
+        meta = {"command": "python benchmarks/bench_scattered_labels.py " + " ".join(argv or sys.argv[1:]),
+                "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} CPUs",
+                "python": platform.python_version(), "load_average": list(np.round(os.getloadavg(), 2))}
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps({"meta": meta, "results": results}, indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
