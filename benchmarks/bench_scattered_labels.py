@@ -24,15 +24,14 @@ Markdown table on stdout (give the sizes smallest first).
 from __future__ import annotations
 
 import argparse
-import json
 import os
-import platform
 import resource
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
+from timing import write_results
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -85,11 +84,7 @@ def main(argv=None) -> int:
         print(lines[-1], file=sys.stderr)
     print("\n".join(lines))
     if args.json:
-        meta = {"command": "python benchmarks/bench_scattered_labels.py " + " ".join(argv or sys.argv[1:]),
-                "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} CPUs",
-                "python": platform.python_version(), "load_average": list(np.round(os.getloadavg(), 2))}
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps({"meta": meta, "results": results}, indent=1) + "\n")
+        write_results(args.json, "bench_scattered_labels.py", argv, results)
     return 0
 
 
