@@ -35,10 +35,6 @@ def omitted_with(*names: str) -> dict[str, tuple[str, ...]]:
     return {"omit_with": names}
 
 
-#: the types JSON writes as they are
-_PLAIN = frozenset({int, float, str, bool, type(None)})
-
-
 def json_ready(value: Any) -> Any:
     """``value`` with results, tuples and NumPy scalars and arrays turned into
     the dicts, lists and Python numbers that :func:`json.dumps` takes; a
@@ -50,18 +46,6 @@ def json_ready(value: Any) -> Any:
     >>> json_ready((np.int64(3), [np.float32(0.5)]))
     [3, [0.5]]
     """
-    kind = type(value)
-    # exact types first: a noisy object's report holds a million surfaces of
-    # plain ints, which the abstract Mapping and Result checks below are
-    # slow to turn away one by one
-    if kind in _PLAIN:
-        return value
-    if kind is dict:
-        if all(type(v) in _PLAIN for v in value.values()) and all(type(k) is str for k in value):
-            return value.copy()  # one surface's counts: nothing in it to turn
-        return {k if type(k) is str else str(k): json_ready(v) for k, v in value.items()}
-    if kind is list:
-        return [json_ready(v) for v in value]
     if isinstance(value, Result):
         return value.to_dict()
     if dataclasses.is_dataclass(value) and not isinstance(value, type):  # a result's part (a verdict's stop)

@@ -323,9 +323,7 @@ def finite_or_null(report: dict) -> dict:
     def finite(x):
         if isinstance(x, float) and not math.isfinite(x):
             return None
-        if not isinstance(x, list) or not any(isinstance(y, (float, list)) for y in x):
-            return x  # (a noisy object's million surfaces: counts, no floats)
-        return [finite(y) for y in x]
+        return [finite(y) for y in x] if isinstance(x, list) else x
 
     return {key: finite(value) for key, value in report.items()}
 

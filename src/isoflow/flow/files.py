@@ -688,7 +688,7 @@ class FlowWriter:
                     f"room and could not be moved back{why}: rename it {target.name} to have it back")
         if done == total:  # stopped as the previous run's files that this one did not replace were removed
             return f"{target}: {what}; this run's {total} files are in place{note}{self._earlier_left()}"
-        if done == 0 and not note:  # the previous entry is where it was (not moved, or moved back)
+        if done == 0 and not note:  # the previous entry is in its place: never moved aside, or moved back
             return self.kept(f"{target}: {what}")
         if done == 0:
             other = "; the previous run's other files are unchanged: run the flow again" if self.had_files else ""

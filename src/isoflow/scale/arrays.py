@@ -137,10 +137,10 @@ def as_array(array, where: str = "volume") -> np.ndarray:
     """
     refuse_masked(array, where)
     refuse_mapping(array, where)
-    refuse_beyond_memory(array, where)
-    read = read_anew(array, where)
+    read = read_anew(array, where)  # a dask array it reads is checked to fit there
     if read is not None:
         return read
+    refuse_beyond_memory(array, where)
     try:
         return np.asarray(array)
     except ValueError as error:
