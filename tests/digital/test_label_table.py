@@ -557,6 +557,24 @@ def test_a_pitch_that_is_not_finite_is_said_to_be_one(pitch):
 
 @needs_numba
 @pytest.mark.parametrize("conn", [6, 26])
+def test_components_of_one_label_nested_in_each_others_cavities_equal_analyze(rng, conn):
+    """A hollow ball of label 1 in a shell of label 2 drilled through, in a
+    shell of label 1, in a scatter of label 3: the space between the two
+    parts of label 1 lies around one (its parent) and inside the other (its
+    child), which the graph walks tell apart per component against its own
+    box; every row equals ``analyze`` of its label."""
+    n = 31
+    r = np.sqrt(((np.indices((n,) * 3) - (n - 1) / 2) ** 2).sum(0))
+    image = np.choose((r // 3).astype(int) % 4, [1, 0, 2, 0]).astype(np.uint8)
+    image[(r >= 15) | (r < 1)] = 0
+    image[:15, 14:17, 14:17][image[:15, 14:17, 14:17] == 2] = 0  # the tunnel through label 2
+    image[(image == 0) & (r < 15) & (rng.random(image.shape) < 0.1)] = 3
+    table = assert_rows_equal_analyze(image, conn, method="compiled")
+    assert table["b0"][:2].tolist() == [2, 1] and table["b2"][:2].tolist() == [2, 0]
+
+
+@needs_numba
+@pytest.mark.parametrize("conn", [6, 26])
 def test_the_graph_of_pieces_placed_on_threads_in_runs_of_pairs_equals_analyze(rng, conn, monkeypatch):
     """The graph of pieces is counted and placed from runs of the vertex
     pass' pairs, a run per thread (a run of one pair here, so that every

@@ -11,17 +11,26 @@ are those of its pieces over the edges of at most that kind, and the
 components of the rest of the image (every other label and the outside)
 are those of the graph with the label's pieces taken out.
 
-Those are found from the label's neighbours outward, one label at a time,
-and the walk stops early: a piece of the rest that reaches the label's
-bounding box (or lies beyond it) is joined to the outside by a straight
-line of voxels that leaves the box, so its component is the outside's.
-Only the components enclosed by the label are walked whole, and they lie
-inside its box; a label's cost is its neighbours and what it encloses,
-whatever the number of labels. Most labels of a map of many small ones
-are walked not at all: a label's components over faces are its pieces
-(a piece is face-connected), and where every piece touching it by a face
-reaches its box, it encloses nothing and, of one component, has one
-surface: its sheets summed on the pass that looked at those pieces.
+Those are found from the label's neighbours outward, one component of
+the label at a time, and the walk stops early. The components of a label
+and of the rest form a tree by adjacency, each enclosed by its parent
+(Kong and Rosenfeld's adjacency tree: the label's components under 6 and
+the rest's under 18 or 26, or 18 or 26 and 6, the pairs the mesh and the
+Betti numbers take); so a component of the rest that touches a
+component K of the label is K's parent, or K's child and then strictly
+inside K's bounding box. A walk from K that reaches K's box (or lies
+beyond it) has found K's parent, whatever lies beyond; only K's children
+are walked whole, and they lie inside its box. Each enclosed component
+of the rest is the child of one component of the label, so counted once.
+A label's cost is its neighbours and what it encloses, whatever the
+number of labels and wherever its components lie: a label scattered
+over the whole image (noise) has components of a voxel or two, whose
+neighbours all reach their boxes. Most labels of a map of many small
+ones are walked not at all: a label's components over faces are its
+pieces (a piece is face-connected), and where every piece touching one
+by a face reaches that component's box, the label encloses nothing and
+each component has one surface: its sheets summed on the pass that
+looked at those pieces.
 """
 
 from __future__ import annotations
@@ -34,8 +43,8 @@ from .memory import mapped
 
 @njit(cache=True, nogil=True, inline="always")
 def _open(piece, plo, phi, blo, bhi):
-    """Whether a piece of the rest reaches the label's box [blo, bhi]
-    (inclusive voxel ranges), or is the outside."""
+    """Whether a piece of the rest reaches the box [blo, bhi] of a
+    component of the label (inclusive voxel ranges), or is the outside."""
     if piece == 0:
         return True
     for d in range(3):
@@ -86,9 +95,9 @@ def _own_components(own, label, piece_label, local, parent, adj_start, adj_to, a
 
 @njit(cache=True, nogil=True, inline="always")
 def _depth(piece, plo, phi, blo, bhi):
-    """How far a piece of the rest lies inside the label's box: the fewest
-    voxels from its box to a face of the label's (at least 1 for a piece
-    that is not open, :func:`_open`)."""
+    """How far a piece of the rest lies inside the box of a component of
+    the label: the fewest voxels from its box to a face of that one (at
+    least 1 for a piece that is not open, :func:`_open`)."""
     depth = plo[piece, 0] - blo[0]
     for d in range(3):
         depth = min(depth, plo[piece, d] - blo[d], bhi[d] - phi[piece, d])
@@ -137,18 +146,19 @@ def _pop(heap, hkey, n):
 def _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, kind, mark, stamp,
                      comp, queue, heap, hkey):
     """Components of the rest of the image over edges of at most ``kind``
-    that touch the label's pieces ``own`` by a face: ``comp[piece]`` (where
-    ``stamp[piece] == mark``) is 0 for the outside's component and 1..m for
-    the enclosed ones. Returns m. Compiled on its own, as
+    that touch the pieces ``own`` (one component of the label, its box
+    [blo, bhi]) by a face: ``comp[piece]`` (where ``stamp[piece] ==
+    mark``) is 0 for the component's parent and 1..m for its children,
+    those it encloses. Returns m. Compiled on its own, as
     :func:`_own_components`.
 
-    Each walk stops at the first piece that reaches the label's box (or a
-    piece of the outside's component walked before), and goes nearest the
-    box's faces first (:func:`_depth`, a heap): the answer, outside or
-    enclosed, is the walk's whatever its order, and a label scattered over
-    the whole image (noise) has its box's faces only as far as the image's,
-    where a walk in rings around its start would cross most of the rest
-    for every label. ``queue`` lists the pieces a walk reached."""
+    Each walk stops at the first piece that reaches the box (or a piece of
+    the parent walked before), and goes nearest the box's faces first
+    (:func:`_depth`, a heap): the answer, parent or child, is the walk's
+    whatever its order, and a component the size of the image has its
+    box's faces only as far as the image's, where a walk in rings around
+    its start would cross most of the rest. ``queue`` lists the pieces a
+    walk reached."""
     enclosed = 0
     for p in own:
         for e in range(adj_start[p], adj_start[p + 1]):
@@ -188,21 +198,58 @@ def _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _all_open(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, adj_n, adj_q):
-    """Whether every piece of the rest that touches the label's pieces
-    ``own`` by a face reaches the label's box: then every component of the
-    rest that :func:`_rest_components` would walk is the outside's, under
-    any kind of edge. Returns that, and where it holds, the sums of the
-    label's sheets and quarters (read on the same pass over its edges)."""
+def _group(parent, m, start, fill, members, own):
+    """The label's pieces ``own`` grouped by their component (``parent``:
+    each piece's root among ``0 .. m - 1``): component ``R``'s pieces are
+    ``members[start[R]:start[R + 1]]`` (empty where ``R`` is no root)."""
+    for t in range(m + 1):
+        start[t] = 0
+    for t in range(m):
+        start[parent[t] + 1] += 1
+    for t in range(m):
+        start[t + 1] += start[t]
+        fill[t] = start[t]
+    for t in range(m):
+        members[fill[parent[t]]] = own[t]
+        fill[parent[t]] += 1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _box(part, plo, phi, blo, bhi):
+    """The bounding box [blo, bhi] of the pieces ``part`` (inclusive voxel
+    ranges)."""
+    for d in range(3):
+        blo[d] = plo[part[0], d]
+        bhi[d] = phi[part[0], d]
+    for p in part:
+        for d in range(3):
+            blo[d] = min(blo[d], plo[p, d])
+            bhi[d] = max(bhi[d], phi[p, d])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _all_open(members, start, m, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, adj_n, adj_q):
+    """Whether every piece of the rest that touches one of the label's
+    components (``members[start[R]:start[R + 1]]``) by a face reaches that
+    component's box: then every component of the rest that
+    :func:`_rest_components` would walk from it is its parent, under any
+    kind of edge, and the label encloses nothing. Returns that, and where
+    it holds, the sums of the label's sheets and quarters (read on the
+    same pass over its edges)."""
     sheets = np.int64(0)
     quarters = np.int64(0)
-    for p in own:
-        for e in range(adj_start[p], adj_start[p + 1]):
-            q = adj_to[e]
-            if adj_kind[e] == 1 and piece_label[q] != label and not _open(q, plo, phi, blo, bhi):
-                return False, sheets, quarters
-            sheets += adj_n[e]
-            quarters += adj_q[e]
+    for R in range(m):
+        if start[R] == start[R + 1]:
+            continue
+        part = members[start[R]:start[R + 1]]
+        _box(part, plo, phi, blo, bhi)
+        for p in part:
+            for e in range(adj_start[p], adj_start[p + 1]):
+                q = adj_to[e]
+                if adj_kind[e] == 1 and piece_label[q] != label and not _open(q, plo, phi, blo, bhi):
+                    return False, sheets, quarters
+                sheets += adj_n[e]
+                quarters += adj_q[e]
     return True, sheets, quarters
 
 
@@ -244,23 +291,30 @@ def _heap_sort(order, n, key):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _surfaces(own, parent, comp, m, adj_start, adj_to, adj_n, adj_q, key, verts, quarters, order, r, srow, schi,
-              sfaces, nsurf):
-    """The label's surfaces from its sheets summed per (own component,
-    rest component), appended at ``nsurf`` in the report's order (most
-    faces first, then chi). Returns the new ``nsurf``; with ``m`` 0, ``comp``
-    is not read (:func:`_all_open` stamps none)."""
-    n = np.int64(0)  # not the literal 0: numba would compile _heap_sort once more for it
-    for t in range(len(own)):
-        p = own[t]
+def _surface_keys(part, root, comp, walked, adj_start, adj_to, adj_n, adj_q, key, verts, quarters, order, n):
+    """The sheets of one component of the label (its pieces ``part``,
+    ``root`` its number), each keyed by the pair (this component, the
+    component of the rest beyond it: ``comp`` where ``walked``, else the
+    parent's, 0), appended at ``n`` for :func:`_surfaces`. Returns the
+    new ``n``."""
+    for p in part:
         for e in range(adj_start[p], adj_start[p + 1]):
             if adj_n[e] == 0:  # a neighbour that none of its sheets reach
                 continue
-            key[n] = parent[t] * (m + 1) + (comp[adj_to[e]] if m > 0 else 0)  # none enclosed: the outside's
+            key[n] = (np.int64(root) << 32) + (comp[adj_to[e]] if walked else 0)
             verts[n] = adj_n[e]
             quarters[n] = adj_q[e]
             order[n] = n
             n += 1
+    return n
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _surfaces(n, key, verts, quarters, order, r, srow, schi, sfaces, nsurf):
+    """The label's surfaces from its ``n`` sheets keyed by
+    :func:`_surface_keys`: summed per key, appended at ``nsurf`` in the
+    report's order (most faces first, then chi). Returns the new
+    ``nsurf``."""
     if n > 32:
         _heap_sort(order, n, key)
     else:
@@ -318,45 +372,63 @@ def _own_parts(own, label, piece_label, local, parent, parent0, adj_start, adj_t
 @njit(cache=True, nogil=True, _nrt=False)
 def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n, adj_q,
                 obj_kind, b0_kind, bg_kind, cc_kind, local, stamp, comp, stamp2, comp2, queue, heap, hkey, parent,
-                parent0, blo, bhi, key, verts, quarters, order, b0, b2, srow, schi, sfaces):
+                parent0, start, fill, members, blo, bhi, key, verts, quarters, order, b0, b2, srow, schi, sfaces):
     """The loop of :func:`label_topology` over its rows, on scratch arrays
     (compiled without reference counting: nothing is allocated here).
-    Returns the number of surfaces."""
+    Returns the number of surfaces.
+
+    The rest's components are walked from each of the label's components
+    in turn, against that component's box; each walk's stamps are its
+    own (``walk`` counts them), since one piece of the rest can lie in one
+    component's parent and in another's child."""
     nsurf = 0
+    walk = 0
     for r in range(len(rows)):
         label = rows[r]
         own = lab_pieces[lab_start[label]:lab_start[label + 1]]
-        if len(own) == 0:
+        m = len(own)
+        if m == 0:
             continue
-        for d in range(3):
-            blo[d] = plo[own[0], d]
-            bhi[d] = phi[own[0], d]
-        for p in own:
-            for d in range(3):
-                blo[d] = min(blo[d], plo[p, d])
-                bhi[d] = max(bhi[d], phi[p, d])
         joined = parent if obj_kind != b0_kind else parent0  # the same components: found once
         b0[r], parts = _own_parts(own, label, piece_label, local, parent, parent0, adj_start, adj_to, adj_kind,
                                   obj_kind, b0_kind)
-        is_open, sheet_sum, quarter_sum = _all_open(own, label, piece_label, plo, phi, blo, bhi, adj_start,
-                                                    adj_to, adj_kind, adj_n, adj_q)
-        if is_open:
-            m = 0  # nothing enclosed, and no piece stamped: _surfaces reads no component with m 0
-        else:
-            m = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, bg_kind,
-                                 r + 1, stamp, comp, queue, heap, hkey)
-        if cc_kind == bg_kind or m == 0:
-            # the rest's components over edges up to cc_kind (>= bg_kind) are unions of those up to bg_kind:
-            # where each of these reaches the outside, so does each of those
-            b2[r] = m
-        else:
-            b2[r] = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind,
-                                     cc_kind, r + 1, stamp2, comp2, queue, heap, hkey)
+        _group(joined, m, start, fill, members, own)
+        is_open, sheet_sum, quarter_sum = _all_open(members, start, m, label, piece_label, plo, phi, blo, bhi,
+                                                    adj_start, adj_to, adj_kind, adj_n, adj_q)
         if is_open and parts == 1:  # one component, nothing enclosed: every sheet is on one surface
             nsurf = _one_surface(sheet_sum, quarter_sum, r, srow, schi, sfaces, nsurf)
-        else:
-            nsurf = _surfaces(own, joined, comp, m, adj_start, adj_to, adj_n, adj_q, key, verts, quarters, order, r,
-                              srow, schi, sfaces, nsurf)
+            b2[r] = 0
+            continue
+        enclosed = 0
+        n = np.int64(0)
+        for R in range(m):
+            if start[R] == start[R + 1]:
+                continue
+            part = members[start[R]:start[R + 1]]
+            children = 0
+            if not is_open:
+                _box(part, plo, phi, blo, bhi)
+                walk += 1
+                children = _rest_components(part, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to,
+                                            adj_kind, bg_kind, walk, stamp, comp, queue, heap, hkey)
+                enclosed += children
+            n = _surface_keys(part, R, comp, children > 0, adj_start, adj_to, adj_n, adj_q, key, verts, quarters,
+                              order, n)
+        nsurf = _surfaces(n, key, verts, quarters, order, r, srow, schi, sfaces, nsurf)
+        if cc_kind == bg_kind or enclosed == 0:
+            # the rest's components over edges up to cc_kind (>= bg_kind) are unions of those up to bg_kind:
+            # where each of these reaches the outside, so does each of those
+            b2[r] = enclosed
+            continue
+        _group(parent0, m, start, fill, members, own)  # the components of b0, each the parent of those it encloses
+        b2[r] = 0
+        for R in range(m):
+            if start[R] < start[R + 1]:
+                part = members[start[R]:start[R + 1]]
+                _box(part, plo, phi, blo, bhi)
+                walk += 1
+                b2[r] += _rest_components(part, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind,
+                                          cc_kind, walk, stamp2, comp2, queue, heap, hkey)
     return nsurf
 
 
@@ -364,6 +436,9 @@ def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, a
 #: piece's place among its label's, two stamps, two components, the walk's
 #: pieces, its heap and their keys)
 TOPOLOGY_BYTES = 8 * 4
+#: and per piece of the label of most pieces (its components twice, their
+#: pieces grouped: where each group starts, where it is filled, the pieces)
+OWN_BYTES = 4 + 4 + 4 + 4 + 8
 
 
 def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n, adj_q,
@@ -386,7 +461,8 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
 
     The labels are independent: the rows are cut into runs of about equal
     work (pieces and edges), each walked on a thread of its own
-    with scratch of its own (:data:`TOPOLOGY_BYTES` per piece).
+    with scratch of its own (:data:`TOPOLOGY_BYTES` per piece, :data:`OWN_BYTES`
+    per piece of the label of most pieces).
     """
     from .compiled import run, thread_count
     from .memory import check_fits
@@ -399,7 +475,8 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
     work = np.cumsum(per_label[rows] + sizes[rows]) if len(rows) else np.zeros(0, np.int64)
     # a thread per run of rows where the walks outweigh its scratch's pages
     threads = max(1, min(thread_count(), int(work[-1] // max(npieces, 1)) if len(work) else 1, len(rows)))
-    check_fits(TOPOLOGY_BYTES * npieces * threads, f"the graph walks of {len(rows):,} labels")
+    check_fits((TOPOLOGY_BYTES * npieces + OWN_BYTES * int(sizes.max(initial=0))) * threads,
+               f"the graph walks of {len(rows):,} labels")
     cuts = [0] + [int(np.searchsorted(work, work[-1] * t / threads)) for t in range(1, threads)] + [len(rows)]
     other = cc_kind != bg_kind
 
@@ -412,13 +489,14 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
         local, queue = np.zeros(npieces, np.int32), np.zeros(npieces, np.uint32)
         heap, hkey = np.zeros(npieces, np.uint32), np.zeros(npieces, np.int32)
         parent, parent0 = np.zeros(own, np.int32), np.zeros(own, np.int32)  # per piece of one label
+        grouping = np.zeros(own + 1, np.int32), np.zeros(own, np.int32), np.zeros(own, np.int64)  # start, fill, members
         stamps = [np.zeros(npieces if k < 2 or other else 1, np.int32) for k in range(4)]  # stamp, comp, stamp2, comp2
         small = [np.zeros(3, np.int64) for _ in range(2)] + [np.zeros(most, np.int64) for _ in range(4)]
         b0, b2 = np.zeros(len(part), np.int64), np.zeros(len(part), np.int64)
         surf = [np.empty(total, np.int64) for _ in range(3)]  # written up to the surfaces found, read no further
         nsurf = _label_loop(part, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n,
                             adj_q, obj_kind, b0_kind, bg_kind, cc_kind, local, *stamps, queue, heap, hkey, parent,
-                            parent0, *small, b0, b2, *surf)
+                            parent0, *grouping, *small, b0, b2, *surf)
         surf[0][:nsurf] += a  # rows of the whole
         return (b0, b2) + tuple(s[:nsurf] for s in surf)
 
