@@ -518,13 +518,47 @@ def test_pieces_beyond_the_budget_are_refused_naming_the_layers_that_fit(monkeyp
     vol = np.random.default_rng(3).integers(1, 7, (40, 40, 40)).astype(np.uint8)
     n = sum(ndimage.label(vol == value)[1] for value in range(1, 7))
     monkeypatch.setattr(memory, "default_budget", lambda: PIECE_BYTES * (n + 1) // 2)
-    with pytest.raises(IsoflowError, match=f"^the statistics of {n:,} pieces of a label image needs about ") as exc:
+    with pytest.raises(IsoflowError, match=f"^the label table of {n:,} pieces of a label image needs about ") as exc:
         label_table(vol, method="compiled")
     found = re.search(r"; about (\d+) of the 40 voxel layers fit: crop the image along its first axis;", str(exc.value))
     assert found and "\n" not in str(exc.value), str(exc.value)
     fit = int(found.group(1))
     table = label_table(vol[:fit], method="compiled")
     assert 1 <= fit < 40 and list(table["voxels"]) == np.bincount(vol[:fit].reshape(-1))[1:].tolist()
+
+
+@needs_numba
+def test_noise_of_many_labels_is_refused_before_its_graph_and_a_grain_map_is_not(monkeypatch):
+    """Noise of 1,000 labels has a piece for nearly every voxel, and the
+    passes after the pieces (features, pairs, the graph) take hundreds of
+    bytes a piece: beyond the budget, the table is refused as soon as the
+    pieces are counted (scipy's count of every value's 6-connected
+    components), before the vertex pass, naming the voxel layers that fit;
+    the crop to them gives its table under the same budget. A map of 64
+    blocks of the same size is not refused under it."""
+    from scipy import ndimage
+
+    from isoflow.digital import label_table as module
+    from isoflow.scale import memory, pieces
+
+    vol = np.random.default_rng(5).integers(1, 1001, (32, 24, 24)).astype(np.uint16)
+    n = sum(ndimage.label(vol == value)[1] for value in np.unique(vol))
+    budget = (pieces.PIECE_BYTES * (n + 1) + module.later_bytes(n + 1)) * 2 // 3
+    monkeypatch.setattr(memory, "default_budget", lambda: budget)
+    reached = []
+    monkeypatch.setattr(pieces, "vertex_pass", lambda *a, **k: reached.append(1))
+    with pytest.raises(IsoflowError, match=f"^the label table of {n:,} pieces of a label image needs about ") as exc:
+        label_table(vol, method="compiled")
+    assert not reached
+    fit = int(re.search(r"; about (\d+) of the 32 voxel layers fit: crop the image along its first axis;",
+                        str(exc.value)).group(1))
+    monkeypatch.undo()
+    monkeypatch.setattr(memory, "default_budget", lambda: budget)
+    table = label_table(vol[:fit], method="compiled")
+    assert 1 <= fit < 32 and table["voxels"].tolist() == np.bincount(vol[:fit].reshape(-1))[1:].tolist()
+    blocks = (np.indices(vol.shape) // np.array([8, 6, 6]).reshape(3, 1, 1, 1))
+    grains = (blocks[0] * 16 + blocks[1] * 4 + blocks[2] + 1).astype(np.uint16)
+    assert label_table(grains, method="compiled")["b0"].tolist() == [1] * 64
 
 
 @pytest.mark.parametrize("label", [1.5, True, np.True_, np.float64(1.5), np.float32(1.5)])

@@ -681,11 +681,44 @@ JOINS = {6: (1, 1, 2, 3), 26: (2, 3, 1, 1)}
 #: bytes per voxel the compiled path takes beyond the image at the least:
 #: the first buffers of the runs (8 bytes a run, a run per 16 voxels: 0.5)
 #: and the per-thread tables of a grain map (its peak: 0.5 byte a voxel at
-#: 512^3 with 1,000 labels, 1.0 at 256^3); the runs, pieces, pairs and the
-#: graph beyond that are checked as they are made (many small labels take
-#: far more: 7 bytes a voxel at 256^3 with 100,000 labels), so that a large
-#: image of few labels is not refused for what only many labels need
+#: 512^3 with 1,000 labels, 1.0 at 256^3); the runs as they are made, and
+#: the pieces with what the passes after them take per piece
+#: (:func:`later_bytes`) as soon as they are counted (many small labels
+#: take far more: 7 bytes a voxel at 256^3 with 100,000 labels, noise of
+#: many labels about 900), so that a large image of few labels is not
+#: refused for what only many labels need
 PIECE_BYTES_PER_VOXEL = 1
+
+
+#: pairs of pieces per piece that the label table's need is reckoned with:
+#: a piece of one voxel touches 26 others, 13 pairs of its own (noise of
+#: many labels has nearly a piece a voxel); the pieces of a grain map touch
+#: 7 or 8 others on average (grains-256-1000 and -100000), and are few
+PAIRS_PER_PIECE = 13
+
+
+def later_bytes(pieces: int) -> int:
+    """Bytes that the label table's passes after the pieces take at their
+    peak for ``pieces`` pieces (:data:`PAIRS_PER_PIECE` pairs a piece, or
+    every pair of them where they are fewer): the features and doubled
+    edges of each piece, the graph's edges both ways and its starts, and
+    the larger of the pairs' entries (held while the graph is made of
+    them) and the walks' scratch on every thread.
+
+    Examples
+    --------
+    >>> from isoflow.scale.compiled import using
+    >>> with using(1):
+    ...     later_bytes(1_000_000) // 1_000_000, later_bytes(3)
+    (831, 678)
+    """
+    from ..scale.compiled import thread_count
+    from ..scale.piece_graph import GRAPH_EDGE_BYTES, TOPOLOGY_BYTES
+    from ..scale.pieces import FEATURE_BYTES, PAIR_ENTRY_BYTES
+
+    pairs = min(PAIRS_PER_PIECE * pieces, pieces * (pieces - 1) // 2)
+    return ((FEATURE_BYTES + 8) * pieces + pairs * 2 * GRAPH_EDGE_BYTES
+            + max(pairs * PAIR_ENTRY_BYTES, TOPOLOGY_BYTES * thread_count() * pieces))
 
 
 def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool,
@@ -702,7 +735,7 @@ def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
                f"label image", hint="store it as .zarr and run isoflow info --labels on that (block by block)")
     if vol.size > MAX_PIECE_VOXELS:
         return slab_rows(np.ascontiguousarray(vol), conn, wanted, surfaces, [vol.shape[0]], background=background)
-    pieces = piece_runs(vol)
+    pieces = piece_runs(vol, later=later_bytes)
     if background:  # every label present, 0 among them: the pieces say which
         wanted = present_labels(pieces["values"], vol.dtype)
     want = wanted_pieces(pieces["values"], vol.dtype, wanted)
@@ -1142,7 +1175,7 @@ class SlabStream:
                              fill=getattr(self.array, "fill_value", None))
             vol = np.ascontiguousarray(read if carried is None else np.concatenate([carried, read]))
         self.carry = None if b == self.nx or isinstance(self.array, np.ndarray) else (b - 2, vol[-2:].copy())
-        pieces = piece_runs(vol, first=x0 - a, last=x1 - a, x0=a, axis=along)
+        pieces = piece_runs(vol, first=x0 - a, last=x1 - a, x0=a, axis=along, later=later_bytes, before=self.total)
         want = wanted_pieces(pieces["values"], vol.dtype, self.wanted, self.background)
         passed = vertex_pass(vol, pieces, want, feature_table(self.conn), pass_tables(self.conn, self.surfaces),
                              layers=(x0, x1 + (x1 == self.nx)), nx=self.nx, x0=a, base=self.total, axis=along)

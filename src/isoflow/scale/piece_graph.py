@@ -38,7 +38,7 @@ from __future__ import annotations
 import numpy as np
 
 from .jit import njit
-from .memory import mapped
+from .memory import check_fits, mapped
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -432,6 +432,9 @@ def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, a
     return nsurf
 
 
+#: bytes per edge of the graph, each way (the piece it leads to, how they
+#: touch, the sheets and quarters of faces over it)
+GRAPH_EDGE_BYTES = 4 + 1 + 4 + 4
 #: bytes per piece of a thread's scratch in :func:`label_topology` (a
 #: piece's place among its label's, two stamps, two components, the walk's
 #: pieces, its heap and their keys)
@@ -465,7 +468,6 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
     per piece of the label of most pieces).
     """
     from .compiled import run, thread_count
-    from .memory import check_fits
 
     rows = np.asarray(rows, np.int64)
     npieces = len(piece_label)
@@ -730,6 +732,9 @@ def entries_graph(entries: list, n: int, none: int) -> tuple[np.ndarray, np.ndar
     for counts in degrees[:-1]:  # a run's edges of a piece after those of the runs before
         fills.append(fills[-1] + counts[1:])
     del degrees
+    # the pieces' need was reckoned with a number of pairs a piece (label_table.PAIRS_PER_PIECE); here it is known
+    check_fits(GRAPH_EDGE_BYTES * touching, f"the graph of {n - 1:,} pieces ({touching // 2:,} pairs)",
+               hint="crop the label image")
     adj = (adj_start, mapped(touching, np.uint32), mapped(touching, np.uint8), mapped(touching, np.uint32),
            mapped(touching, np.uint32))
 

@@ -42,6 +42,7 @@ so that it holds the pairs of the pieces being crossed (:class:`PairSink`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import cache
 
 import numpy as np
@@ -103,8 +104,12 @@ def check_layers(need: int, what: str, layers: int, note: str = "", budget: int 
     # the need of a crop in proportion to its layers, a tenth spared: the
     # pieces of an image are not spread evenly, and a crop cuts some in two
     fit = 9 * layers * budget // (10 * max(need if whole is None else whole, 1))
-    hint = (f"about {fit:,} of the {layers:,} voxel layers fit: crop the image along {axis}" if fit >= 1
-            else f"not even one of the {layers:,} voxel layers fits: crop the image across {axis}")
+    if fit >= layers:  # these layers would fit but for what was held before them (earlier slabs of a store)
+        hint = f"crop the image along {axis}"
+    elif fit >= 1:
+        hint = f"about {fit:,} of the {layers:,} voxel layers fit: crop the image along {axis}"
+    else:
+        hint = f"not even one of the {layers:,} voxel layers fits: crop the image across {axis}"
     check_fits(need, what, hint=hint + (f"; {note}" if note else ""), budget=budget)
 
 
@@ -516,7 +521,7 @@ MAX_PIECE_VOXELS = 0xFFFFFFFF - 1
 
 
 def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: int = 0,
-               axis: str = "its first axis") -> dict:
+               axis: str = "its first axis", later: Callable[[int], int] | None = None, before: int = 0) -> dict:
     """The 6-connected pieces of every value of a 3D integer image, as runs.
 
     A run is a maximal stretch of one value along a row of the last axis;
@@ -530,6 +535,11 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     the layers ``first <= x < last`` of axis 0 only (all by default), at
     global coordinate ``x + x0`` (for slabs of a larger volume). A refusal
     names the image's first axis as ``axis`` (:func:`check_layers`).
+    ``later``: the bytes that the passes after this one take for a number
+    of pieces (the label table's), these and ``before`` more (those of the
+    slabs read before): checked with the statistics, as soon as the
+    pieces are counted, so that an image of too many pieces (noise) is
+    refused before the passes that would not fit.
 
     The runs of each slab of layers are found and joined with the rows
     before them on a thread of their own, the slabs' seams joined after.
@@ -567,9 +577,11 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     for lo, _ in parts[1:]:
         _join_seam(flat, w, ny, nz, lo, offsets, starts, parent)
     n = int(_count_roots(parent))
-    check_layers(PIECE_BYTES * (n + 1), f"the statistics of {n:,} pieces of a label image", nx,
-                 note="a label image of noise has a piece for about every other voxel",
-                 whole=(PIECE_BYTES + FEATURE_BYTES) * (n + 1), axis=axis)
+    what = f"the {'statistics' if later is None else 'label table'} of {n:,} pieces of a label image"
+    after = (lambda pieces: FEATURE_BYTES * pieces) if later is None else later
+    check_layers(PIECE_BYTES * (n + 1) + (0 if later is None else later(n + 1 + before)), what, nx,
+                 note="noise of many labels has a piece for nearly every voxel",
+                 whole=PIECE_BYTES * (n + 1) + after(n + 1), axis=axis)
     values = np.zeros(n + 1, np.uint64)
     _number_runs(flat, w, offsets, starts, parent, nz, values)
     counts, sums, lo, hi = piece_stats(offsets, starts, parent, (nx, ny, nz), n, (first, nx if last is None else last),
