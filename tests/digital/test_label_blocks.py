@@ -14,6 +14,7 @@ from test_label_table import nested
 from isoflow import label_table
 from isoflow.cli import main
 from isoflow.digital.label_blocks import label_table_blocks
+from isoflow.errors import IsoflowError
 from isoflow.scale.compiled import have_numba
 
 pytestmark = pytest.mark.skipif(not have_numba(), reason="numba not installed")
@@ -523,3 +524,29 @@ def test_a_chunk_beyond_the_budget_is_refused_naming_it_and_what_fits(tmp_path, 
     got = label_table_blocks(z, layers=[layers] * (20 // layers) + ([20 % layers] if 20 % layers else []))
     same_tables(got, want)
     assert got["voxels"].tolist() == [np.count_nonzero(image == 1), np.count_nonzero(image == 2)]
+
+
+@pytest.mark.parametrize("kind", ["dask", "numpy"])
+@pytest.mark.parametrize("axes", [None, (2, 0, 1)])
+def test_a_masked_voxel_read_block_by_block_is_refused_naming_it(kind, axes):
+    """A dask array of masked blocks (``dask.array.ma``) or a masked NumPy
+    array read block by block gave the table of the values stored under
+    the mask, as if they were labels (``numpy.asarray`` drops the mask):
+    the line names the masked voxel and the two remedies, and the array
+    filled with 0 gives the table of the image with that voxel 0."""
+    da = pytest.importorskip("dask.array")
+    image = np.zeros((12, 10, 10), np.uint8)
+    image[2:10, 2:8, 2:8] = 1
+    mask = np.zeros(image.shape, bool)
+    mask[5, 3, 7] = True
+    if kind == "dask":
+        array = da.ma.masked_array(da.from_array(image, chunks=(4, 10, 10)), mask=da.from_array(mask, chunks=(4, 10, 10)))
+        filled = da.ma.filled(array, 0)
+    else:
+        array = np.ma.masked_array(image, mask=mask)
+        filled = array.filled(0)
+    layers = [4, 4, 4] if axes is None else [4, 6]
+    with pytest.raises(IsoflowError, match=r"^label_table_blocks: array: voxel \(5, 3, 7\) is masked \(1 masked element "
+                                           r"in voxel layers \d+-\d+\); pass .*filled.* or .*data"):
+        label_table_blocks(array, layers=layers, axes=axes)
+    same_tables(label_table_blocks(filled, layers=layers, axes=axes), label_table(np.where(mask, 0, image)))

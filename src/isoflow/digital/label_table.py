@@ -463,8 +463,9 @@ def as_labels(array, first_layer: int = 0, axis: int = 0, fill: object = None) -
     no label (NaN, infinite, beyond int64, not whole) and its voxel
     (``first_layer``: the index of the array's layer 0 along ``axis``),
     and, where that value is ``fill`` (a zarr array's fill value), that
-    zarr reads it for a chunk never written."""
-    vol = np.asarray(array)
+    zarr reads it for a chunk never written; and one naming the first
+    masked voxel of a masked part (:func:`unmasked`)."""
+    vol = unmasked(array, first_layer, axis)
     kind = label_dtype(vol.dtype)
     if vol.dtype == np.bool_:
         return vol.view(np.uint8)
@@ -485,6 +486,43 @@ def as_labels(array, first_layer: int = 0, axis: int = 0, fill: object = None) -
                 raise IsoflowError(f"{cell} ({where}) holds {flat[at].item()!r}, {FILL_READ}: {why}; {FILL_ZERO}")
             raise IsoflowError(f"{cell} ({where}) holds {flat[at].item()!r}: {why}")
     return flat.astype(kind).reshape(vol.shape)
+
+
+def unmasked(array, first_layer: int = 0, axis: int = 0) -> np.ndarray:
+    """A part of a label image read as a NumPy array, a part with masked
+    elements refused: a masked NumPy array's, or a dask array's of masked
+    blocks (``dask.array.ma``), computed as itself, where
+    ``numpy.asarray`` would give the values stored under the mask as if
+    they were labels. The line names the first masked voxel
+    (``first_layer``: the index of the part's layer 0 along ``axis``).
+
+    Examples
+    --------
+    >>> part = np.ma.masked_equal(np.array([[[1, 2], [2, 1]]]), 2)
+    >>> try:
+    ...     unmasked(part, first_layer=4)
+    ... except IsoflowError as error:
+    ...     print(str(error).split(";")[0])
+    voxel (4, 0, 1) is masked (2 masked elements in voxel layer 4)
+    >>> unmasked(np.ma.masked_equal(np.ones((1, 2, 2), int), 2)).tolist()
+    [[[1, 1], [1, 1]]]
+    """
+    from ..errors import counted
+    from ..scale.arrays import is_masked_array
+
+    dask = type(array).__module__.split(".")[0] == "dask"
+    if dask:
+        array = array.compute()
+    masked = int(np.ma.count_masked(array)) if is_masked_array(array) else 0
+    if not masked:
+        return np.asarray(array)
+    voxel = np.unravel_index(int(np.argmax(np.ma.getmaskarray(array))), array.shape)
+    at = ", ".join(str(int(i) + (first_layer if d == axis else 0)) for d, i in enumerate(voxel))
+    layers = array.shape[axis]
+    span = f"voxel layer {first_layer}" if layers == 1 else f"voxel layers {first_layer}-{first_layer + layers - 1}"
+    filled, data = ("dask.array.ma.filled(a, 0)", "dask.array.ma.getdata(a)") if dask else ("a.filled(0)", "a.data")
+    raise IsoflowError(f"voxel ({at}) is masked ({counted(masked, 'masked element')} in {span}); pass {filled} to "
+                       f"read the masked elements as 0 (background), or {data} to use the values stored under the mask")
 
 
 def _is_fill(value: np.floating, fill: object) -> bool:
@@ -1149,7 +1187,7 @@ class SlabStream:
         slab = (most + 2) * area * (PIECE_BYTES_PER_VOXEL + label_dtype(self.array.dtype).itemsize)
         if (b - a) * area * self.read_bytes() + self.decoded(a, b)[1] + slab > memory.default_budget():
             return
-        vol = as_labels(np.asarray(self.array[a:b]), first_layer=a, fill=getattr(self.array, "fill_value", None))
+        vol = as_labels(self.array[a:b], first_layer=a, fill=getattr(self.array, "fill_value", None))
         self.held = (a, vol)
 
     def slab(self, x0: int, x1: int) -> None:
@@ -1171,7 +1209,7 @@ class SlabStream:
             carried = self.carry[1] if self.carry is not None and self.carry[0] == a and b - a > 2 else None
             start = a if carried is None else a + len(carried)
             self.check_read(start, b, (PIECE_BYTES_PER_VOXEL + self.read_bytes()) * voxels, what)
-            read = as_labels(np.asarray(self.array[start:b]), first_layer=start,
+            read = as_labels(self.array[start:b], first_layer=start,
                              fill=getattr(self.array, "fill_value", None))
             vol = np.ascontiguousarray(read if carried is None else np.concatenate([carried, read]))
         self.carry = None if b == self.nx or isinstance(self.array, np.ndarray) else (b - 2, vol[-2:].copy())

@@ -141,6 +141,13 @@ def as_array(array, where: str = "volume") -> np.ndarray:
     if read is not None:
         return read
     refuse_beyond_memory(array, where)
+    if type(array).__module__.split(".")[0] == "dask" and hasattr(array, "compute"):
+        # one that read_anew leaves (its tasks run in other processes): computed as itself, where numpy.asarray
+        # would give a masked block's data
+        array = array.compute()
+        masked = int(np.ma.count_masked(array)) if is_masked_array(array) else 0
+        if masked:
+            raise IsoflowError(masked_blocks(where, masked))
     try:
         return np.asarray(array)
     except ValueError as error:
@@ -239,12 +246,25 @@ def _place(read: np.ndarray, places: list[tuple[slice, ...]], where: str, *block
     for place, block in zip(places, blocks):
         masked = int(np.ma.count_masked(block)) if is_masked_array(block) else 0
         if masked:
-            corner = tuple(s.start for s in place)
-            raise IsoflowError(
-                f"{where}: a dask array of masked blocks, the block at {corner} with {counted(masked, 'masked element')}; "
-                "pass dask.array.ma.filled(a, 0) to read them as 0 (background), or dask.array.ma.getdata(a) to use "
-                "the values stored under the mask")
+            raise IsoflowError(masked_blocks(where, masked, tuple(s.start for s in place)))
         read[place] = block
+
+
+def masked_blocks(where: str, masked: int, corner: tuple[int, ...] | None = None) -> str:
+    """The line that refuses a dask array of masked blocks with ``masked``
+    masked elements (in the block at ``corner`` where known).
+
+    Examples
+    --------
+    >>> masked_blocks("volume", 3, (4, 0, 0)).split(";")[0]
+    'volume: a dask array of masked blocks, the block at (4, 0, 0) with 3 masked elements'
+    >>> masked_blocks("volume", 1).split(";")[0]
+    'volume: a dask array of masked blocks with 1 masked element'
+    """
+    at = "" if corner is None else f", the block at {corner}"
+    return (f"{where}: a dask array of masked blocks{at} with {counted(masked, 'masked element')}; pass "
+            "dask.array.ma.filled(a, 0) to read them as 0 (background), or dask.array.ma.getdata(a) to use the "
+            "values stored under the mask")
 
 
 def _flat(keys):
