@@ -520,7 +520,7 @@ def test_a_chunk_beyond_the_budget_is_refused_naming_it_and_what_fits(tmp_path, 
     z[...] = image
     # the pieces with what the passes after them take (tests/digital/test_label_table.py) are checked on
     # their own, and at this budget of a few KiB they would be refused too: here the chunks alone
-    monkeypatch.setattr(importlib.import_module("isoflow.digital.label_table"), "later_bytes", lambda pieces: 0)
+    monkeypatch.setattr(importlib.import_module("isoflow.digital.label_table"), "later_bytes", lambda pieces, size: 0)
     got = label_table_blocks(z, layers=[layers] * (20 // layers) + ([20 % layers] if 20 % layers else []))
     same_tables(got, want)
     assert got["voxels"].tolist() == [np.count_nonzero(image == 1), np.count_nonzero(image == 2)]

@@ -543,7 +543,7 @@ def test_noise_of_many_labels_is_refused_before_its_graph_and_a_grain_map_is_not
 
     vol = np.random.default_rng(5).integers(1, 1001, (32, 24, 24)).astype(np.uint16)
     n = sum(ndimage.label(vol == value)[1] for value in np.unique(vol))
-    budget = (pieces.PIECE_BYTES * (n + 1) + module.later_bytes(n + 1)) * 2 // 3
+    budget = (pieces.PIECE_BYTES * (n + 1) + module.later_bytes(n + 1, vol.size / (n + 1))) * 2 // 3
     monkeypatch.setattr(memory, "default_budget", lambda: budget)
     reached = []
     monkeypatch.setattr(pieces, "vertex_pass", lambda *a, **k: reached.append(1))

@@ -728,33 +728,40 @@ JOINS = {6: (1, 1, 2, 3), 26: (2, 3, 1, 1)}
 PIECE_BYTES_PER_VOXEL = 1
 
 
-#: pairs of pieces per piece that the label table's need is reckoned with:
-#: a piece of one voxel touches 26 others, 13 pairs of its own (noise of
-#: many labels has nearly a piece a voxel); the pieces of a grain map touch
-#: 7 or 8 others on average (grains-256-1000 and -100000), and are few
-PAIRS_PER_PIECE = 13
+#: pairs of pieces per piece that the label table's need is reckoned with,
+#: :data:`PAIRS_PER_PIECE` plus :data:`PAIRS_PER_SMALL_PIECE` over the
+#: voxels a piece holds on average (measured, ``benchmarks/.cache`` and
+#: random images at 64^3): the pieces of a grain map (140 voxels or more
+#: each) touch 7 or 8 others, which is what a cell of a 3D tessellation
+#: does; pieces of one voxel (noise of many labels) 12.7, of 1.4 voxels
+#: (noise of 10 labels) 11.6; thin or sparse pieces fewer (columns 4.9,
+#: noise of 2 labels 2.6, sheets 2.0)
+PAIRS_PER_PIECE = 8
+PAIRS_PER_SMALL_PIECE = 5
 
 
-def later_bytes(pieces: int) -> int:
+def later_bytes(pieces: int, voxels_per_piece: float = 1.0) -> int:
     """Bytes that the label table's passes after the pieces take at their
-    peak for ``pieces`` pieces (:data:`PAIRS_PER_PIECE` pairs a piece, or
-    every pair of them where they are fewer): the features and doubled
-    edges of each piece, the graph's edges both ways and its starts, and
-    the larger of the pairs' entries (held while the graph is made of
-    them) and the walks' scratch on every thread.
+    peak for ``pieces`` pieces of ``voxels_per_piece`` voxels on average
+    (their pairs reckoned as :data:`PAIRS_PER_PIECE` said, or every pair
+    of them where they are fewer): the features and doubled edges of each
+    piece, the graph's edges both ways and its starts, and the larger of
+    the pairs' entries (held while the graph is made of them) and the
+    walks' scratch on every thread.
 
     Examples
     --------
     >>> from isoflow.scale.compiled import using
-    >>> with using(1):
-    ...     later_bytes(1_000_000) // 1_000_000, later_bytes(3)
-    (831, 678)
+    >>> with using(1):  # noise of many labels, a grain map, three pieces
+    ...     later_bytes(10**6) // 10**6, later_bytes(10**6, 140) // 10**6, later_bytes(3)
+    (831, 577, 678)
     """
     from ..scale.compiled import thread_count
     from ..scale.piece_graph import GRAPH_EDGE_BYTES, TOPOLOGY_BYTES
     from ..scale.pieces import FEATURE_BYTES, PAIR_ENTRY_BYTES
 
-    pairs = min(PAIRS_PER_PIECE * pieces, pieces * (pieces - 1) // 2)
+    per_piece = PAIRS_PER_PIECE + PAIRS_PER_SMALL_PIECE / max(voxels_per_piece, 1.0)
+    pairs = min(int(per_piece * pieces), pieces * (pieces - 1) // 2)
     return ((FEATURE_BYTES + 8) * pieces + pairs * 2 * GRAPH_EDGE_BYTES
             + max(pairs * PAIR_ENTRY_BYTES, TOPOLOGY_BYTES * thread_count() * pieces))
 

@@ -521,7 +521,7 @@ MAX_PIECE_VOXELS = 0xFFFFFFFF - 1
 
 
 def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: int = 0,
-               axis: str = "its first axis", later: Callable[[int], int] | None = None, before: int = 0) -> dict:
+               axis: str = "its first axis", later: Callable[[int, float], int] | None = None, before: int = 0) -> dict:
     """The 6-connected pieces of every value of a 3D integer image, as runs.
 
     A run is a maximal stretch of one value along a row of the last axis;
@@ -536,8 +536,9 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     global coordinate ``x + x0`` (for slabs of a larger volume). A refusal
     names the image's first axis as ``axis`` (:func:`check_layers`).
     ``later``: the bytes that the passes after this one take for a number
-    of pieces (the label table's), these and ``before`` more (those of the
-    slabs read before): checked with the statistics, as soon as the
+    of pieces of a number of voxels each (the label table's), these and
+    ``before`` more (those of the slabs read before): checked with the
+    statistics, as soon as the
     pieces are counted, so that an image of too many pieces (noise) is
     refused before the passes that would not fit.
 
@@ -578,10 +579,11 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
         _join_seam(flat, w, ny, nz, lo, offsets, starts, parent)
     n = int(_count_roots(parent))
     what = f"the {'statistics' if later is None else 'label table'} of {n:,} pieces of a label image"
-    after = (lambda pieces: FEATURE_BYTES * pieces) if later is None else later
-    check_layers(PIECE_BYTES * (n + 1) + (0 if later is None else later(n + 1 + before)), what, nx,
+    size = flat_vol.size / (n + 1)  # voxels a piece, as those before this slab hold them too
+    after = FEATURE_BYTES * (n + 1) if later is None else later(n + 1, size)
+    check_layers(PIECE_BYTES * (n + 1) + (0 if later is None else later(n + 1 + before, size)), what, nx,
                  note="noise of many labels has a piece for nearly every voxel",
-                 whole=PIECE_BYTES * (n + 1) + after(n + 1), axis=axis)
+                 whole=PIECE_BYTES * (n + 1) + after, axis=axis)
     values = np.zeros(n + 1, np.uint64)
     _number_runs(flat, w, offsets, starts, parent, nz, values)
     counts, sums, lo, hi = piece_stats(offsets, starts, parent, (nx, ny, nz), n, (first, nx if last is None else last),
