@@ -591,6 +591,17 @@ def test_a_pitch_that_is_not_finite_is_said_to_be_one(pitch):
 
 @needs_numba
 @pytest.mark.parametrize("conn", [6, 26])
+def test_labels_of_hundreds_of_surfaces_of_many_sizes_equal_analyze(rng, conn):
+    """Noise of a few labels (at 26 sparse enough not to percolate): each
+    label has a hundred surfaces or more, of many sizes and genera, which
+    the table orders as analyze does, most faces first, then chi."""
+    image = rng.integers(0, 3 if conn == 6 else 12, (18, 17, 16)).astype(np.uint8)
+    table = assert_rows_equal_analyze(image, conn, method="compiled")
+    assert (table["surfaces"] > 100).all() and len({g for row in table["genera"] for g in row}) >= 2
+
+
+@needs_numba
+@pytest.mark.parametrize("conn", [6, 26])
 def test_components_of_one_label_nested_in_each_others_cavities_equal_analyze(rng, conn):
     """A hollow ball of label 1 in a shell of label 2 drilled through, in a
     shell of label 1, in a scatter of label 3: the space between the two

@@ -315,7 +315,14 @@ def _surfaces(n, key, verts, quarters, order, r, srow, schi, sfaces, nsurf):
     :func:`_surface_keys`: summed per key, appended at ``nsurf`` in the
     report's order (most faces first, then chi). Returns the new
     ``nsurf``."""
-    if n > 32:
+    ordered = True  # the keys come grouped by component, each in order where it encloses nothing: no sort then
+    for t in range(1, n):
+        if key[t] < key[t - 1]:
+            ordered = False
+            break
+    if ordered:
+        pass
+    elif n > 32:
         _heap_sort(order, n, key)
     else:
         _sort_by(order, n, key, key)
@@ -335,8 +342,20 @@ def _surfaces(n, key, verts, quarters, order, r, srow, schi, sfaces, nsurf):
         key[s - first] = -sfaces[s]
         verts[s - first] = schi[s]
         order[s - first] = s - first
-    _sort_by(order, nsurf - first, key, verts)
-    for t in range(nsurf - first):
+    m = nsurf - first
+    if m > 32:
+        # most faces first, then chi, as one key (faces and |chi| below 2^31): a label of thousands of surfaces of
+        # many sizes (noise of a few labels) would make the insertion sort's moves quadratic; surfaces of equal
+        # faces and chi are alike, so the order among them is no matter
+        for t in range(m):
+            key[t] = (key[t] << 32) + (verts[t] + (1 << 31))
+        _heap_sort(order, np.int64(m), key)
+        for t in range(m):
+            sfaces[first + t] = -(key[order[t]] >> 32)
+            schi[first + t] = (key[order[t]] & 0xFFFFFFFF) - (1 << 31)
+        return nsurf
+    _sort_by(order, m, key, verts)
+    for t in range(m):
         sfaces[first + t] = -key[order[t]]
         schi[first + t] = verts[order[t]]
     return nsurf
