@@ -1409,8 +1409,7 @@ class PairSink:
         keep, s = 0, 0
         while s < len(self.pairs):
             if not self.blocks or self.blocks[-1][3] == len(self.blocks[-1][0]):
-                self.blocks.append([mapped(ENTRY_BLOCK, np.uint64), mapped(ENTRY_BLOCK, np.uint8),
-                                    mapped((ENTRY_BLOCK, 2), np.uint64), 0])
+                self.blocks.append(_entry_block(ENTRY_BLOCK))
             block = self.blocks[-1]
             s, block[3], moved = _drain(self.pairs, new, self.top, self.base, below, *block, s)
             keep += moved
@@ -1437,6 +1436,19 @@ class PairSink:
                  "voxel layers cross" if size > FIRST_SLOTS else "not even one thread's first table fits")
         check_threads(PAIR_BYTES * size, self.threads, f"a pair table of {size:,} slots per thread", alone)
         return new_pairs(size)
+
+
+def _entry_block(size: int) -> list:
+    """An empty block of ``size`` pair entries, ``[keys, kind, sums, 0]``,
+    all three in one map of pages (:func:`~isoflow.scale.memory.mapped`):
+    the graph of pieces lets a block go once it is placed, and its pages
+    go back to the system then. Keys and kind in arrays of their own would
+    be small enough for the C allocator's heaps, which keep their memory
+    among the blocks still held."""
+    pages = mapped(size * PAIR_ENTRY_BYTES, np.uint8)
+    keys = pages[:8 * size].view(np.uint64)
+    sums = pages[8 * size:24 * size].view(np.uint64).reshape(size, 2)
+    return [keys, pages[24 * size:], sums, 0]
 
 
 def read_out(filled: list, npieces: int, layers: int = 1,
