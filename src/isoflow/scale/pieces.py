@@ -1493,20 +1493,22 @@ def pieces_held(offsets: np.ndarray, runs: np.ndarray, r0: int, r1: int) -> tupl
 def features_of(counts: list[np.ndarray], windows: list, npieces: int, rows: np.ndarray) -> np.ndarray:
     """Per piece, the features of its vertices: each thread's counts of
     each group of configurations (over its window of pieces) times the
-    group's row of features, added up, each range of pieces on a thread of
-    its own (from every window that reaches it); the counts let go once
-    added."""
+    group's row of features, added up, window by window (each cut into
+    ranges of pieces on threads of their own). The list is taken over:
+    a window's counts are let go as soon as they are added, so that the
+    counts and the features, whose pages fill window by window, are not
+    all held at once."""
     out = mapped((npieces, rows.shape[1]), np.int64)
     weights = np.ascontiguousarray(rows, np.int64)
 
-    def add(a: int, b: int) -> None:
-        """Pieces a .. b - 1, from every window that holds some of them."""
-        for (lo, hi), part in zip(windows, counts):
-            x, y = max(a, lo), min(b, hi)
-            if x < y:
-                _add_features(part[x - lo:y - lo], weights, out[x:y])
+    def add(part: np.ndarray, lo: int, a: int, b: int) -> None:
+        """Pieces lo + a .. lo + b - 1 of a window."""
+        _add_features(part[a:b], weights, out[lo + a:lo + b])
 
-    run([(add, a, b) for a, b in slabs(npieces, len(counts))])
+    for w, (lo, hi) in enumerate(windows):
+        part, counts[w] = counts[w], None
+        run([(add, part, lo, a, b) for a, b in slabs(hi - lo, len(windows)) if b > a])
+        del part  # the window's pages go back now
     counts.clear()
     return out
 
