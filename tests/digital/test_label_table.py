@@ -166,6 +166,41 @@ def test_many_pieces_grow_the_pair_table_and_threads_agree(rng):
             np.allclose(one[key], numpy[key]), key
 
 
+
+@needs_numba
+@pytest.mark.parametrize("slabs", [False, True])
+def test_the_graph_of_pieces_lets_each_block_of_pairs_go_before_it_returns(rng, monkeypatch, slabs):
+    """The pairs of pieces are handed to the graph of pieces (the vertex
+    pass' blocks, or the slabs' pairs joined into one), which empties the
+    list and lets every block go while it places them: none is alive once
+    the graph is made (the pairs and the whole graph are not held at
+    once). A vertex pass block's keys, kind and sums lie in one set of
+    pages, given back together (keys and kind apart would stay in the C
+    allocator's heaps). The table is the NumPy path's."""
+    import weakref
+
+    from isoflow.scale import piece_graph, pieces
+
+    monkeypatch.setattr(pieces, "ENTRY_BLOCK", 256)  # tens of blocks from a small image
+    if slabs:
+        monkeypatch.setattr(pieces, "MAX_PIECE_VOXELS", 600)  # slabs of 3 layers
+    made, seen = piece_graph.entries_graph, []
+
+    def watched(entries, n, none):
+        assert slabs or all(keys.base is kind.base is sums.base for keys, kind, sums in entries)
+        refs = [weakref.ref(a.base) for block in entries for a in block]
+        graph = made(entries, n, none)
+        seen.append((len(entries), sum(ref() is not None for ref in refs), len(refs)))
+        return graph
+
+    monkeypatch.setattr(piece_graph, "entries_graph", watched)
+    image = rng.integers(0, 40, (14, 13, 12)).astype(np.uint16)
+    table = label_table(image, 26, method="compiled", threads=2)
+    assert len(seen) == 1 and seen[0][:2] == (0, 0) and seen[0][2] >= (3 if slabs else 12), seen
+    numpy = label_table(image, 26, method="numpy")
+    for key in numpy:
+        assert np.array_equal(table[key], numpy[key]) or np.allclose(table[key], numpy[key]), key
+
 def cells(rng, shape=(26, 22, 24), count=400):
     """A cell segmentation's form: hundreds of tiny labels (one to a few
     voxels, some touching each other by faces, edges or vertices, some on

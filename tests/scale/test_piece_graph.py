@@ -59,3 +59,37 @@ def test_pairs_in_blocks_on_threads_give_the_plain_graph(rng, threads, monkeypat
             whole = piece_graph.pair_graph(keys, kind, sums, n, NONE)
         assert as_edges(graph, n) == plain_graph(keys, kind, sums, n)
         assert all(np.array_equal(a, b) for a, b in zip(graph, whole))
+
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_each_run_lets_a_block_go_as_soon_as_it_is_placed(rng, threads, monkeypatch):
+    """The list of blocks is taken over (empty on return) and each run lets
+    go of its part of a block once it has placed it: when a run places a
+    block, the blocks that run placed before are gone already, and none
+    is left at the end. The graph is the plain loop's."""
+    import weakref
+
+    from isoflow.scale import piece_graph
+
+    monkeypatch.setattr(piece_graph, "PAIRS_PER_THREAD", 40)  # with 2 threads, runs of 5 blocks each
+    n = 30
+    keys, kind, sums = random_pairs(rng, n, 200)
+    blocks = [(k.copy(), c.copy(), s.copy()) for k, c, s in
+              zip(np.split(keys, 10), np.split(kind, 10), np.split(sums, 10))]
+    refs = [weakref.ref(block[0]) for block in blocks]
+    fill, seen = piece_graph._fill_pair_graph, []
+
+    def watched(k, *args):
+        placing = next(i for i, ref in enumerate(refs) if ref() is k.base)
+        run = placing * threads // 10
+        seen.append((placing, [refs[i]() is not None for i in range(10) if i * threads // 10 == run and i < placing]))
+        return fill(k, *args)
+
+    monkeypatch.setattr(piece_graph, "_fill_pair_graph", watched)
+    with using(threads):
+        graph = piece_graph.entries_graph(blocks, n, NONE)
+    assert blocks == [] and not any(ref() is not None for ref in refs)
+    assert sorted(i for i, _ in seen) == list(range(10))
+    assert not any(any(before) for _, before in seen), seen
+    assert as_edges(graph, n) == plain_graph(keys, kind, sums, n)

@@ -205,3 +205,39 @@ def test_a_pair_table_drain_writes_out_keeps_and_empties_as_three_passes_did(rng
     # the table grew, asked to and because the pairs kept crowded it, and was used again at its size
     assert not want_open and len(want_out) > 100 and rehashed and len(set(sizes)) > 1 and len(sizes) > len(set(sizes))
 
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_the_features_let_each_windows_counts_go_once_added(rng, threads, monkeypatch):
+    """The threads' counts of configurations, each over its window of
+    pieces (windows that overlap), are added window by window: when a
+    window is added, the counts of the windows before it are gone, and
+    the list is empty at the end (the counts and the whole table of
+    features are not held at once). The features are the counts times
+    the groups' rows, summed over the windows (NumPy's matrix product)."""
+    import weakref
+
+    from isoflow.scale import pieces
+    from isoflow.scale.compiled import using
+
+    windows, npieces = [(0, 50), (40, 100), (100, 100), (95, 160)], 160
+    rows = rng.integers(-3, 4, (7, 5))
+    counts = [rng.integers(0, 3, (hi - lo, 7)).astype(np.uint32) for lo, hi in windows]
+    want = np.zeros((npieces, 5), np.int64)
+    for (lo, hi), part in zip(windows, counts):
+        want[lo:hi] += part.astype(np.int64) @ rows
+    del part  # the list holds the counts alone
+    refs = [weakref.ref(part) for part in counts]
+    add, gone = pieces._add_features, []
+
+    def watched(part, *args):
+        w = next(i for i, ref in enumerate(refs) if ref() is part.base)
+        gone.append([refs[i]() is None for i in range(w)])
+        return add(part, *args)
+
+    monkeypatch.setattr(pieces, "_add_features", watched)
+    with using(threads):
+        got = pieces.features_of(counts, windows, npieces, rows)
+    assert np.array_equal(got, want)
+    assert counts == [] and all(ref() is None for ref in refs)
+    assert len(gone) >= 3 and all(all(before) for before in gone), gone

@@ -1036,12 +1036,11 @@ def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, pass
     from ..scale.pieces import NONE
 
     n = len(piece_label)
+    # the pairs handed over, not kept here: entries_graph lets each block go once it is placed
     if "entries" in passed:  # the vertex pass' blocks of pairs as they are (vertex_pass(..., joined=False))
         graph = entries_graph(passed.pop("entries"), n, NONE)
     else:
-        graph = entries_graph([(passed["keys"], passed["kind"], passed["sums"])], n, NONE)
-        for key in ("keys", "kind", "sums"):  # the graph holds them now, in less
-            passed[key] = passed[key][:0].copy()  # (a view would keep them)
+        graph = entries_graph([tuple(passed.pop(key) for key in ("keys", "kind", "sums"))], n, NONE)
     present = np.flatnonzero(rows >= 0)
     obj_kind, b0_kind, bg_kind, cc_kind = JOINS[conn]
     found = label_topology(rows[present].astype(np.int64), lab_start, lab_pieces, piece_label, pieces["lo"],

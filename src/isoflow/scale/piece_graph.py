@@ -723,15 +723,23 @@ def entries_graph(entries: list, n: int, none: int) -> tuple[np.ndarray, np.ndar
     piece's edges from an earlier run come first, as one pass over all of
     them would place them.
 
+    The list is taken over: it is empty on return, and once the pairs are
+    counted only the runs that still have to place a block hold it, each
+    letting go of its part of a block as soon as that is placed. A block
+    that nothing else holds (the vertex pass' blocks, each in pages of its
+    own) is then given back to the system while the graph's pages fill,
+    so that the pairs and the whole graph are not held at once.
+
     Examples
     --------
     >>> keys = np.array([(1 << 32) | 2, (1 << 32) | 3], np.uint64)
     >>> sums = np.array([[(4 << 32) | 2, 0], [0, 0]], np.uint64)
     >>> kind = np.array([1, 2], np.uint8)
     >>> one = entries_graph([(keys, kind, sums)], 4, 4)
-    >>> two = entries_graph([(keys[:1], kind[:1], sums[:1]), (keys[1:], kind[1:], sums[1:])], 4, 4)
-    >>> all((a == b).all() for a, b in zip(one, two))
-    True
+    >>> blocks = [(keys[:1], kind[:1], sums[:1]), (keys[1:], kind[1:], sums[1:])]
+    >>> two = entries_graph(blocks, 4, 4)
+    >>> all((a == b).all() for a, b in zip(one, two)), blocks  # the list is taken over
+    (True, [])
     """
     from .compiled import run, thread_count
 
@@ -739,6 +747,7 @@ def entries_graph(entries: list, n: int, none: int) -> tuple[np.ndarray, np.ndar
     total = sum(sizes)
     threads = max(1, min(thread_count(), total // PAIRS_PER_THREAD))
     parts = _cut_entries(entries, sizes, [total * t // threads for t in range(threads + 1)])
+    entries.clear()  # the runs' parts hold the blocks now, each let go where it is placed
     degrees = [np.zeros(n + 1, np.int64) for _ in parts]
 
     def count(part: list, counts: np.ndarray) -> int:
@@ -758,9 +767,12 @@ def entries_graph(entries: list, n: int, none: int) -> tuple[np.ndarray, np.ndar
            mapped(touching, np.uint32))
 
     def place(part: list, fill: np.ndarray) -> None:
-        """The edges of a run of pairs at their pieces' places."""
-        for keys, kind, sums in part:
+        """The edges of a run of pairs at their pieces' places, each part
+        of a block let go once placed (the block's pages go with the last)."""
+        while part:
+            keys, kind, sums = part.pop(0)
             _fill_pair_graph(keys, kind, sums, none, fill, *adj[1:])
+            del keys, kind, sums
 
     run([(place, part, fill) for part, fill in zip(parts, fills)])
     return adj

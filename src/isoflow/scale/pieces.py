@@ -1411,8 +1411,7 @@ class PairSink:
         keep, s = 0, 0
         while s < len(self.pairs):
             if not self.blocks or self.blocks[-1][3] == len(self.blocks[-1][0]):
-                self.blocks.append([mapped(ENTRY_BLOCK, np.uint64), mapped(ENTRY_BLOCK, np.uint8),
-                                    mapped((ENTRY_BLOCK, 2), np.uint64), 0])
+                self.blocks.append(_entry_block(ENTRY_BLOCK))
             block = self.blocks[-1]
             s, block[3], moved = _drain(self.pairs, new, self.top, self.base, below, *block, s)
             keep += moved
@@ -1439,6 +1438,19 @@ class PairSink:
                  "voxel layers cross" if size > FIRST_SLOTS else "not even one thread's first table fits")
         check_threads(PAIR_BYTES * size, self.threads, f"a pair table of {size:,} slots per thread", alone)
         return new_pairs(size)
+
+
+def _entry_block(size: int) -> list:
+    """An empty block of ``size`` pair entries, ``[keys, kind, sums, 0]``,
+    all three in one map of pages (:func:`~isoflow.scale.memory.mapped`):
+    the graph of pieces lets a block go once it is placed, and its pages
+    go back to the system then. Keys and kind in arrays of their own would
+    be small enough for the C allocator's heaps, which keep their memory
+    among the blocks still held."""
+    pages = mapped(size * PAIR_ENTRY_BYTES, np.uint8)
+    keys = pages[:8 * size].view(np.uint64)
+    sums = pages[8 * size:24 * size].view(np.uint64).reshape(size, 2)
+    return [keys, pages[24 * size:], sums, 0]
 
 
 def read_out(filled: list, npieces: int, layers: int = 1,
@@ -1483,20 +1495,22 @@ def pieces_held(offsets: np.ndarray, runs: np.ndarray, r0: int, r1: int) -> tupl
 def features_of(counts: list[np.ndarray], windows: list, npieces: int, rows: np.ndarray) -> np.ndarray:
     """Per piece, the features of its vertices: each thread's counts of
     each group of configurations (over its window of pieces) times the
-    group's row of features, added up, each range of pieces on a thread of
-    its own (from every window that reaches it); the counts let go once
-    added."""
+    group's row of features, added up, window by window (each cut into
+    ranges of pieces on threads of their own). The list is taken over:
+    a window's counts are let go as soon as they are added, so that the
+    counts and the features, whose pages fill window by window, are not
+    all held at once."""
     out = mapped((npieces, rows.shape[1]), np.int64)
     weights = np.ascontiguousarray(rows, np.int64)
 
-    def add(a: int, b: int) -> None:
-        """Pieces a .. b - 1, from every window that holds some of them."""
-        for (lo, hi), part in zip(windows, counts):
-            x, y = max(a, lo), min(b, hi)
-            if x < y:
-                _add_features(part[x - lo:y - lo], weights, out[x:y])
+    def add(part: np.ndarray, lo: int, a: int, b: int) -> None:
+        """Pieces lo + a .. lo + b - 1 of a window."""
+        _add_features(part[a:b], weights, out[lo + a:lo + b])
 
-    run([(add, a, b) for a, b in slabs(npieces, len(counts))])
+    for w, (lo, hi) in enumerate(windows):
+        part, counts[w] = counts[w], None
+        run([(add, part, lo, a, b) for a, b in slabs(hi - lo, len(windows)) if b > a])
+        del part  # the window's pages go back now
     counts.clear()
     return out
 
