@@ -745,16 +745,17 @@ def later_bytes(pieces: int, voxels_per_piece: float = 1.0) -> int:
     peak for ``pieces`` pieces of ``voxels_per_piece`` voxels on average
     (their pairs reckoned as :data:`PAIRS_PER_PIECE` said, or every pair
     of them where they are fewer): the features and doubled edges of each
-    piece, the graph's edges both ways and its starts, and the larger of
-    the pairs' entries (held while the graph is made of them) and the
-    walks' scratch on every thread.
+    piece, and the larger of the pairs' entries (held until the graph is
+    made of them, each block let go as it is placed) and the graph (its
+    edges both ways and its starts) with the walks' scratch on every
+    thread.
 
     Examples
     --------
     >>> from isoflow.scale.compiled import using
     >>> with using(1):  # noise of many labels, a grain map, three pieces
     ...     later_bytes(10**6) // 10**6, later_bytes(10**6, 140) // 10**6, later_bytes(3)
-    (831, 577, 678)
+    (538, 408, 678)
     """
     from ..scale.compiled import thread_count
     from ..scale.piece_graph import GRAPH_EDGE_BYTES, TOPOLOGY_BYTES
@@ -762,8 +763,8 @@ def later_bytes(pieces: int, voxels_per_piece: float = 1.0) -> int:
 
     per_piece = PAIRS_PER_PIECE + PAIRS_PER_SMALL_PIECE / max(voxels_per_piece, 1.0)
     pairs = min(int(per_piece * pieces), pieces * (pieces - 1) // 2)
-    return ((FEATURE_BYTES + 8) * pieces + pairs * 2 * GRAPH_EDGE_BYTES
-            + max(pairs * PAIR_ENTRY_BYTES, TOPOLOGY_BYTES * thread_count() * pieces))
+    graph = 8 * pieces + pairs * 2 * GRAPH_EDGE_BYTES
+    return FEATURE_BYTES * pieces + max(pairs * PAIR_ENTRY_BYTES, graph + TOPOLOGY_BYTES * thread_count() * pieces)
 
 
 def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool,
