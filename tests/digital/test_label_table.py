@@ -596,6 +596,28 @@ def test_noise_of_many_labels_is_refused_before_its_graph_and_a_grain_map_is_not
     assert label_table(grains, method="compiled")["b0"].tolist() == [1] * 64
 
 
+@needs_numba
+def test_a_table_whose_pieces_would_not_fit_is_made_label_by_label(monkeypatch):
+    """Noise of three labels (a noisy segmentation of three phases) has
+    a piece for every third voxel, and the one pass' pieces and graph
+    take hundreds of bytes a voxel where each label's own ``analyze``
+    takes tens: under a budget between the two, ``"auto"`` gives the
+    table label by label (each row ``analyze`` of its label, as the
+    NumPy path's), where ``"compiled"`` is refused; under a budget that
+    neither fits, the refusal is the one pass', naming what would fit."""
+    from isoflow.scale import memory
+
+    image = np.random.default_rng(0).integers(0, 4, (64, 64, 64)).astype(np.uint8)
+    monkeypatch.setattr(memory, "default_budget", lambda: 20 << 20)
+    table = assert_rows_equal_analyze(image, 6)
+    assert table["label"].tolist() == [1, 2, 3]
+    with pytest.raises(IsoflowError, match=r"^the label table of [\d,]+ pieces of a label image needs about "):
+        label_table(image, method="compiled")
+    monkeypatch.setattr(memory, "default_budget", lambda: 4 << 20)
+    with pytest.raises(IsoflowError, match=r"^the label table of [\d,]+ pieces .* voxel layers fit: crop the image"):
+        label_table(image)
+
+
 @pytest.mark.parametrize("label", [1.5, True, np.True_, np.float64(1.5), np.float32(1.5)])
 def test_a_label_asked_for_as_a_float_or_a_bool_is_refused(label):
     """``labels=[True]`` was taken as label 1, and ``1.5`` cut to it: a

@@ -291,7 +291,9 @@ def label_table(
         where numba is installed, unless the NumPy pass answers before
         numba would start (few labels with small boxes, in a process
         that has not imported numba, counting the NumPy work of earlier
-        images there; see :func:`compiled_sooner`). A 2D
+        images there; see :func:`compiled_sooner`), and the NumPy pass
+        where the compiled one would not fit in memory (noise, a piece
+        for nearly every voxel: :func:`table_rows`). A 2D
         image takes one NumPy pass for all labels
         (:mod:`isoflow.digital.planar_labels`) whatever the method.
     threads : int, optional
@@ -402,9 +404,33 @@ def label_table(
         return with_names(unheld_columns(planar_table(vol, conn, place.spacing, place.origin, wanted, background),
                                          place.origin, place.spacing, vol.shape), names)
     with using(threads):
-        found = (piece_rows if _use_compiled(vol, method) else box_rows)(vol, conn, wanted, surfaces, background)
+        found = table_rows(vol, conn, wanted, surfaces, background, method)
     return with_names(unheld_columns(columns(found, place.spacing, place.origin, surfaces), place.origin,
                                      place.spacing, vol.shape), names)
+
+
+def table_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool, background: bool,
+               method: str) -> dict:
+    """The rows by the pass that ``method`` takes (:func:`_use_compiled`):
+    with ``"auto"``, where the compiled pass would not fit in memory (a
+    label image of noise, whose pieces, nearly one a voxel, and their
+    graph take hundreds of bytes a voxel), each label's own ``analyze``
+    (:func:`box_rows`), which needs tens and gives the same table; where
+    neither fits, the compiled pass' refusal, which names what would."""
+    from ..scale.memory import DoesNotFit
+
+    if not _use_compiled(vol, method):
+        return box_rows(vol, conn, wanted, surfaces, background)
+    try:
+        return piece_rows(vol, conn, wanted, surfaces, background)
+    except DoesNotFit as refusal:
+        if method != "auto":
+            raise
+        first = refusal
+    try:
+        return box_rows(vol, conn, wanted, surfaces, background)
+    except DoesNotFit:
+        raise first from None
 
 
 def checked_image(image, where: str) -> np.ndarray:
@@ -1315,10 +1341,16 @@ def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bo
     from .analysis import analyze
 
     flat = vol.reshape(-1)
+    shape = "x".join(map(str, vol.shape))
+    # the voxels' order and the values sorted by it
+    check_fits((8 + flat.itemsize) * flat.size, f"the label table of a {shape} label image, label by label")
     order = np.argsort(flat, kind="stable")
     values, starts = np.unique(flat[order], return_index=True)
     labels = (values if background else values[values != 0]) if wanted is None else wanted.astype(values.dtype)
     ends = np.append(starts[1:], flat.size)
+    # a label's voxels as coordinates, three columns and their stack (each box's analyze checks its own need)
+    most = int((ends - starts).max(initial=0))
+    check_fits((8 + flat.itemsize) * flat.size + 48 * most, f"the label table of a {shape} label image, label by label")
     found = {"label": labels, "voxels": np.zeros(len(labels), np.int64), "sums": np.zeros((len(labels), 3)),
              "lo": np.zeros((len(labels), 3), np.int64), "hi": np.full((len(labels), 3), -1, np.int64),
              "features": np.zeros((len(labels), 17), np.int64), "doubled": np.zeros(len(labels), np.int64),

@@ -232,11 +232,17 @@ def budget_of(max_bytes: object, where: str = "voxelize") -> int:
     return whole
 
 
+class DoesNotFit(IsoflowError):
+    """The refusal of work that would not fit in memory (:func:`check_fits`):
+    a caller that has another way to the same answer, in less memory,
+    takes that one instead (``label_table`` of a label image of noise)."""
+
+
 def check_fits(need: int, what: str, hint: str = "", budget: int | None = None) -> None:
-    """Raise :class:`IsoflowError` when ``need`` bytes exceed the budget."""
+    """Raise :class:`DoesNotFit` when ``need`` bytes exceed the budget."""
     budget = default_budget() if budget is None else int(budget)
     if need > budget:
-        raise IsoflowError(
+        raise DoesNotFit(
             f"{what} needs about {sized(need)} of memory, more than the budget of {sized(budget)} "
             "(the memory available now)" + (f"; {hint}" if hint else "")
         )
