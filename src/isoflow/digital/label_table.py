@@ -1338,6 +1338,12 @@ def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bo
     (outside the box everything is the label's complement, so the report
     is the whole image's), the voxels of every label from one sort;
     ``background``: with ``wanted`` None, label 0's row too."""
+    with budget_held():  # the memory available read once, for the sort's check and every box's
+        return _box_rows(vol, conn, wanted, surfaces, background)
+
+
+def _box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool, background: bool) -> dict:
+    """:func:`box_rows` within its budget."""
     from .analysis import analyze
 
     flat = vol.reshape(-1)
@@ -1355,28 +1361,28 @@ def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bo
              "lo": np.zeros((len(labels), 3), np.int64), "hi": np.full((len(labels), 3), -1, np.int64),
              "features": np.zeros((len(labels), 17), np.int64), "doubled": np.zeros(len(labels), np.int64),
              "b0": np.zeros(len(labels), np.int64), "b2": np.zeros(len(labels), np.int64)}
-    surfs: list[tuple[int, int, int]] = []
-    # each box's analyze checks its memory: the memory available read once for them all
-    with budget_held():
-        for row, label in enumerate(labels):
-            at = np.searchsorted(values, label)
-            if at == len(values) or values[at] != label:
-                continue
-            where = np.stack(np.unravel_index(order[starts[at]:ends[at]], vol.shape), axis=1)
-            lo, hi = where.min(axis=0), where.max(axis=0)
-            box = np.pad(vol[tuple(slice(a, b + 1) for a, b in zip(lo, hi))] == label, 1)
-            # the pass is chosen once for the whole image (_use_compiled): the
-            # boxes do not add to the tally of "auto", which would load numba
-            # part way through this call
-            report = analyze(box, conn, surfaces=surfaces, method="compiled" if use_census(box, surfaces) else "numpy")
-            found["voxels"][row], found["sums"][row] = len(where), where.sum(axis=0)
-            found["lo"][row], found["hi"][row] = lo, hi
-            found["b0"][row], found["b2"][row] = report["betti"][0], report["betti"][2]
-            found["features"][row] = _report_features(report, box)
-            found["doubled"][row] = report.get("doubled_edges", 0)
-            surfs += [(row, s["euler_characteristic"], s["faces"]) for s in report.get("surfaces", ())]
-    table = np.array(surfs, np.int64).reshape(-1, 3)
-    found.update(surface_rows=table[:, 0], surface_chi=table[:, 1], surface_faces=table[:, 2])
+    surfs: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # per label: its rows, chi and faces
+    for row, label in enumerate(labels):
+        at = np.searchsorted(values, label)
+        if at == len(values) or values[at] != label:
+            continue
+        where = np.stack(np.unravel_index(order[starts[at]:ends[at]], vol.shape), axis=1)
+        lo, hi = where.min(axis=0), where.max(axis=0)
+        box = np.pad(vol[tuple(slice(a, b + 1) for a, b in zip(lo, hi))] == label, 1)
+        # the pass is chosen once for the whole image (_use_compiled): the
+        # boxes do not add to the tally of "auto", which would load numba
+        # part way through this call
+        report = analyze(box, conn, surfaces=surfaces, method="compiled" if use_census(box, surfaces) else "numpy")
+        found["voxels"][row], found["sums"][row] = len(where), where.sum(axis=0)
+        found["lo"][row], found["hi"][row] = lo, hi
+        found["b0"][row], found["b2"][row] = report["betti"][0], report["betti"][2]
+        found["features"][row] = _report_features(report, box)
+        found["doubled"][row] = report.get("doubled_edges", 0)
+        if surfaces:  # the report's columns, not a dict per surface (noise: hundreds of thousands a label)
+            table = report.surfaces.columns()
+            surfs.append((np.full(len(report.surfaces), row, np.int64), table["euler_characteristic"], table["faces"]))
+    rows_chi_faces = [np.concatenate(c) if c else np.zeros(0, np.int64) for c in zip(*surfs)] or [np.zeros(0, np.int64)] * 3
+    found.update(surface_rows=rows_chi_faces[0], surface_chi=rows_chi_faces[1], surface_faces=rows_chi_faces[2])
     return found
 
 
