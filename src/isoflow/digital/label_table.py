@@ -749,7 +749,7 @@ JOINS = {6: (1, 1, 2, 3), 26: (2, 3, 1, 1)}
 #: the pieces with what the passes after them take per piece
 #: (:func:`later_bytes`) as soon as they are counted (many small labels
 #: take far more: 7 bytes a voxel at 256^3 with 100,000 labels, noise of
-#: many labels about 900), so that a large image of few labels is not
+#: many labels about 660), so that a large image of few labels is not
 #: refused for what only many labels need
 PIECE_BYTES_PER_VOXEL = 1
 

@@ -320,11 +320,9 @@ def _surfaces(n, key, verts, quarters, order, r, srow, schi, sfaces, nsurf):
         if key[t] < key[t - 1]:
             ordered = False
             break
-    if ordered:
-        pass
-    elif n > 32:
+    if not ordered and n > 32:
         _heap_sort(order, n, key)
-    else:
+    elif not ordered:
         _sort_by(order, n, key, key)
     first = nsurf
     for t in range(n):
