@@ -1378,7 +1378,7 @@ def _box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: b
         found["b0"][row], found["b2"][row] = report["betti"][0], report["betti"][2]
         found["features"][row] = _report_features(report, box)
         found["doubled"][row] = report.get("doubled_edges", 0)
-        if surfaces:  # the report's columns, not a dict per surface (noise: hundreds of thousands a label)
+        if report.surfaces is not None:  # the report's columns, not a dict a surface (noise: 100,000s a label)
             table = report.surfaces.columns()
             surfs.append((np.full(len(report.surfaces), row, np.int64), table["euler_characteristic"], table["faces"]))
     rows_chi_faces = [np.concatenate(c) if c else np.zeros(0, np.int64) for c in zip(*surfs)] or [np.zeros(0, np.int64)] * 3
