@@ -94,6 +94,16 @@ def rng():
     return np.random.default_rng(20131122)
 
 
+def without_compile_note(stderr: str) -> str:
+    """A child process' stderr less the compile note: where numba's cache
+    is cold (a fresh ``NUMBA_CACHE_DIR``, as CI has), whether a pass is
+    compiled in this test's command or in an earlier test's depends on the
+    order the tests run in, which the workers share out."""
+    from isoflow.scale.compiled import COMPILE_NOTE
+
+    return "\n".join(line for line in stderr.splitlines() if not line.endswith(COMPILE_NOTE))
+
+
 def random_volume(rng, max_side: int = 7, ndim: int = 3) -> np.ndarray:
     shape = rng.integers(1, max_side + 1, ndim)
     return rng.random(shape) < rng.uniform(0.1, 0.9)

@@ -14,7 +14,7 @@ import pickle
 import numpy as np
 import pytest
 
-from isoflow.errors import IsoflowError, NoSuchFile, NotAPath, missing
+from isoflow.errors import DoesNotFit, IsoflowError, NoSuchFile, NotAPath, missing
 from isoflow.mesh.formats.magicavoxel import ModelTooLarge
 from isoflow.mesh.grid import GridTooLarge
 from isoflow.mesh.surface_blocks import EmptySurface
@@ -32,6 +32,7 @@ def examples() -> list[tuple[BaseException, dict]]:
          {"command_line": "gone.npy: no such file (--out)"}),
         (EmptySurface("v.npy: no voxel of the object"), {}),
         (ModelTooLarge("big.vox: at most 256 voxels a side"), {}),
+        (DoesNotFit("the table needs about 2.0 GiB of memory, more than the budget of 1.0 GiB"), {}),
     ]
     given = {"bare": "m.zarr: not a binary volume", "every": None, "ndim": 3, "kind": "labels", "value": np.uint8(255)}
     cases.append((NotBinary("m.zarr: not a binary volume; --label 255", **given), given))

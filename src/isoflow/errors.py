@@ -857,6 +857,23 @@ class NoSuchFile(IsoflowError, FileNotFoundError):
     """
 
 
+class DoesNotFit(IsoflowError):
+    """The refusal of work that would not fit in memory
+    (:func:`isoflow.scale.memory.check_fits`): a caller that has another
+    way to the same answer in less memory takes that one instead
+    (``label_table`` of a noisy label image, label by label).
+
+    Examples
+    --------
+    >>> from isoflow.scale.memory import check_fits
+    >>> try:
+    ...     check_fits(2 << 30, "the table", budget=1 << 30)
+    ... except DoesNotFit as exc:
+    ...     print(isinstance(exc, IsoflowError), str(exc).split(" (")[0])
+    True the table needs about 2.0 GiB of memory, more than the budget of 1.0 GiB
+    """
+
+
 class IsoflowWarning(UserWarning):
     """Something a user should know that is not an error: a file format that
     cannot keep the voxel size, an affine's rotation left out. The command

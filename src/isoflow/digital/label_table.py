@@ -417,7 +417,7 @@ def table_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
     graph take hundreds of bytes a voxel), each label's own ``analyze``
     (:func:`box_rows`), which needs tens and gives the same table; where
     neither fits, the compiled pass' refusal, which names what would."""
-    from ..scale.memory import DoesNotFit
+    from ..errors import DoesNotFit
 
     if not _use_compiled(vol, method):
         return box_rows(vol, conn, wanted, surfaces, background)

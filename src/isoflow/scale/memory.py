@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import DTypeLike
 
-from ..errors import IsoflowError, given_text, whole_given
+from ..errors import DoesNotFit, IsoflowError, given_text, whole_given
 
 #: where Linux says what memory this process may use: its own files, and
 #: the control groups' (both are paths so that a test can give others)
@@ -230,12 +230,6 @@ def budget_of(max_bytes: object, where: str = "voxelize") -> int:
     if whole is None or whole < 1:
         raise IsoflowError(f"{where}: max_bytes must be a positive whole number of bytes, got {given_text(max_bytes)}")
     return whole
-
-
-class DoesNotFit(IsoflowError):
-    """The refusal of work that would not fit in memory (:func:`check_fits`):
-    a caller that has another way to the same answer, in less memory,
-    takes that one instead (``label_table`` of a label image of noise)."""
 
 
 def check_fits(need: int, what: str, hint: str = "", budget: int | None = None) -> None:
