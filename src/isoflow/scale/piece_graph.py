@@ -386,10 +386,28 @@ def _own_parts(own, label, piece_label, local, parent, parent0, adj_start, adj_t
     return b0, _own_components(own, label, piece_label, local, parent, adj_start, adj_to, adj_kind, obj_kind)
 
 
+#: the walks' stamps are int32: past this many walks on one thread they
+#: start again from 1 on cleared stamps (read when the walks start)
+MOST_WALKS = 2**31 - 2
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _next_walk(walk, most, stamp, stamp2):
+    """The stamp of the next walk: ``walk + 1``, or 1 on cleared stamps
+    past ``most`` walks (:data:`MOST_WALKS`, where the int32 stamps would
+    wrap: an image of billions of pieces)."""
+    if walk < most:
+        return walk + 1
+    stamp[:] = 0
+    stamp2[:] = 0
+    return 1
+
+
 @njit(cache=True, nogil=True, _nrt=False)
 def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n, adj_q,
                 obj_kind, b0_kind, bg_kind, cc_kind, local, stamp, comp, stamp2, comp2, queue, heap, hkey, parent,
-                parent0, start, fill, members, blo, bhi, key, verts, quarters, order, b0, b2, srow, schi, sfaces):
+                parent0, start, fill, members, blo, bhi, key, verts, quarters, order, b0, b2, srow, schi, sfaces,
+                most_walks):
     """The loop of :func:`label_topology` over its rows, on scratch arrays
     (compiled without reference counting: nothing is allocated here).
     Returns the number of surfaces.
@@ -425,7 +443,7 @@ def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, a
             children = 0
             if not is_open:
                 _box(part, plo, phi, blo, bhi)
-                walk += 1
+                walk = _next_walk(walk, most_walks, stamp, stamp2)
                 children = _rest_components(part, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to,
                                             adj_kind, bg_kind, walk, stamp, comp, queue, heap, hkey)
                 enclosed += children
@@ -443,7 +461,7 @@ def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, a
             if start[R] < start[R + 1]:
                 part = members[start[R]:start[R + 1]]
                 _box(part, plo, phi, blo, bhi)
-                walk += 1
+                walk = _next_walk(walk, most_walks, stamp, stamp2)
                 b2[r] += _rest_components(part, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind,
                                           cc_kind, walk, stamp2, comp2, queue, heap, hkey)
     return nsurf
@@ -515,7 +533,7 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
         surf = [np.empty(total, np.int64) for _ in range(3)]  # written up to the surfaces found, read no further
         nsurf = _label_loop(part, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n,
                             adj_q, obj_kind, b0_kind, bg_kind, cc_kind, local, *stamps, queue, heap, hkey, parent,
-                            parent0, *grouping, *small, b0, b2, *surf)
+                            parent0, *grouping, *small, b0, b2, *surf, MOST_WALKS)
         surf[0][:nsurf] += a  # rows of the whole
         return (b0, b2) + tuple(s[:nsurf] for s in surf)
 
