@@ -1354,9 +1354,10 @@ def _box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: b
     values, starts = np.unique(flat[order], return_index=True)
     labels = (values if background else values[values != 0]) if wanted is None else wanted.astype(values.dtype)
     ends = np.append(starts[1:], flat.size)
-    # a label's voxels as coordinates, three columns and their stack (each box's analyze checks its own need)
+    # a label's voxels' coordinates along one axis at a time, and its work on them (each box's analyze checks its
+    # own need)
     most = int((ends - starts).max(initial=0))
-    check_fits((8 + flat.itemsize) * flat.size + 48 * most, f"the label table of a {shape} label image, label by label")
+    check_fits((8 + flat.itemsize) * flat.size + 16 * most, f"the label table of a {shape} label image, label by label")
     found = {"label": labels, "voxels": np.zeros(len(labels), np.int64), "sums": np.zeros((len(labels), 3)),
              "lo": np.zeros((len(labels), 3), np.int64), "hi": np.full((len(labels), 3), -1, np.int64),
              "features": np.zeros((len(labels), 17), np.int64), "doubled": np.zeros(len(labels), np.int64),
@@ -1366,14 +1367,13 @@ def _box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: b
         at = np.searchsorted(values, label)
         if at == len(values) or values[at] != label:
             continue
-        where = np.stack(np.unravel_index(order[starts[at]:ends[at]], vol.shape), axis=1)
-        lo, hi = where.min(axis=0), where.max(axis=0)
+        lo, hi, sums = _extent(order[starts[at]:ends[at]], vol.shape)
         box = np.pad(vol[tuple(slice(a, b + 1) for a, b in zip(lo, hi))] == label, 1)
         # the pass is chosen once for the whole image (_use_compiled): the
         # boxes do not add to the tally of "auto", which would load numba
         # part way through this call
         report = analyze(box, conn, surfaces=surfaces, method="compiled" if use_census(box, surfaces) else "numpy")
-        found["voxels"][row], found["sums"][row] = len(where), where.sum(axis=0)
+        found["voxels"][row], found["sums"][row] = ends[at] - starts[at], sums
         found["lo"][row], found["hi"][row] = lo, hi
         found["b0"][row], found["b2"][row] = report["betti"][0], report["betti"][2]
         found["features"][row] = _report_features(report, box)
@@ -1384,6 +1384,26 @@ def _box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: b
     rows_chi_faces = [np.concatenate(c) if c else np.zeros(0, np.int64) for c in zip(*surfs)] or [np.zeros(0, np.int64)] * 3
     found.update(surface_rows=rows_chi_faces[0], surface_chi=rows_chi_faces[1], surface_faces=rows_chi_faces[2])
     return found
+
+
+def _extent(flat_index: np.ndarray, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The lowest and highest corner and the coordinate sums of the voxels
+    at ``flat_index`` (C order) of an image of ``shape``, one axis at a
+    time: a coordinate array of the voxels at once, not one per axis.
+
+    Examples
+    --------
+    >>> lo, hi, sums = _extent(np.array([5, 11, 12]), (2, 3, 4))  # (0, 1, 1), (0, 2, 3), (1, 0, 0)
+    >>> lo.tolist(), hi.tolist(), sums.tolist()
+    ([0, 0, 0], [1, 2, 3], [1, 3, 4])
+    """
+    lo, hi, sums = (np.zeros(len(shape), np.int64) for _ in range(3))
+    step = 1
+    for d in range(len(shape) - 1, -1, -1):
+        coordinate = flat_index // step % shape[d]
+        lo[d], hi[d], sums[d] = coordinate.min(), coordinate.max(), coordinate.sum()
+        step *= shape[d]
+    return lo, hi, sums
 
 
 def _report_features(report: Mapping, box: np.ndarray) -> np.ndarray:
