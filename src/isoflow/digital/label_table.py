@@ -1389,7 +1389,8 @@ def _box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: b
 def _extent(flat_index: np.ndarray, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The lowest and highest corner and the coordinate sums of the voxels
     at ``flat_index`` (C order) of an image of ``shape``, one axis at a
-    time: a coordinate array of the voxels at once, not one per axis.
+    time: one array of the voxels' coordinates held at once, not three and
+    their stack.
 
     Examples
     --------
