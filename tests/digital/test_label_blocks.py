@@ -550,3 +550,21 @@ def test_a_masked_voxel_read_block_by_block_is_refused_naming_it(kind, axes):
                                            r"in voxel layers \d+-\d+\); pass .*filled.* or .*data"):
         label_table_blocks(array, layers=layers, axes=axes)
     same_tables(label_table_blocks(filled, layers=layers, axes=axes), label_table(np.where(mask, 0, image)))
+
+
+def test_noise_read_slab_by_slab_is_refused_counting_the_pieces_of_the_slabs_before(monkeypatch):
+    """Noise of 1,000 labels read in slabs: each slab's pieces fit, all of
+    them and their graph do not. The refusal comes at the slab where they
+    stop fitting, counts the pieces of the slabs before beside the slab's
+    own, and says to crop along the axis read; with room for them all the
+    table equals the one of the image in memory."""
+    from isoflow.scale import memory
+
+    vol = np.random.default_rng(5).integers(1, 1001, (24, 16, 16)).astype(np.uint16)
+    monkeypatch.setattr(memory, "default_budget", lambda: 3 << 20)
+    with pytest.raises(IsoflowError, match=r"^label_table_blocks: array: the label table of [\d,]+ pieces of a label "
+                                           r"image \(beside [\d,]+ of the layers read before\) needs about .*; crop the "
+                                           r"image along x; "):
+        label_table_blocks(vol, layers=[8, 8, 8])
+    monkeypatch.setattr(memory, "default_budget", lambda: 64 << 20)
+    same_tables(label_table_blocks(vol, layers=[8, 8, 8]), label_table(vol))

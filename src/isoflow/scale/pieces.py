@@ -579,6 +579,8 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
         _join_seam(flat, w, ny, nz, lo, offsets, starts, parent)
     n = int(_count_roots(parent))
     what = f"the {'statistics' if later is None else 'label table'} of {n:,} pieces of a label image"
+    if later is not None and before:
+        what += f" (beside {before:,} of the layers read before)"
     size = flat_vol.size / (n + 1)  # voxels a piece, as those before this slab hold them too
     after = FEATURE_BYTES * (n + 1) if later is None else later(n + 1, size)
     check_layers(PIECE_BYTES * (n + 1) + (0 if later is None else later(n + 1 + before, size)), what, nx,
