@@ -618,6 +618,32 @@ def test_a_table_whose_pieces_would_not_fit_is_made_label_by_label(monkeypatch):
         label_table(image)
 
 
+@needs_numba
+def test_auto_takes_the_label_by_label_pass_where_the_pieces_are_many_and_the_labels_few(monkeypatch):
+    """Noise of three labels has a piece for every third voxel: once the
+    pieces are counted, "auto" makes the table label by label (the
+    sooner there), the same table as the one pass'; noise of 40 labels
+    and a map of 64 blocks keep the one pass."""
+    from isoflow.digital import label_table as module
+
+    called = []
+    by_label = module.box_rows
+    monkeypatch.setattr(module, "box_rows", lambda *a, **k: called.append(1) or by_label(*a, **k))
+    rng = np.random.default_rng(2)
+    few = rng.integers(0, 4, (64, 64, 64)).astype(np.uint8)
+    many = rng.integers(0, 41, (64, 64, 64)).astype(np.uint8)
+    blocks = np.indices(few.shape) // 16
+    grains = (blocks[0] * 16 + blocks[1] * 4 + blocks[2] + 1).astype(np.uint8)
+    one_pass = label_table(few, method="compiled")
+    assert not called
+    table = label_table(few)
+    assert called and all(np.array_equal(table[k], one_pass[k]) if table[k].dtype != object
+                          else table[k].tolist() == one_pass[k].tolist() for k in table)
+    called.clear()
+    label_table(many), label_table(grains)
+    assert not called
+
+
 @pytest.mark.parametrize("label", [1.5, True, np.True_, np.float64(1.5), np.float32(1.5)])
 def test_a_label_asked_for_as_a_float_or_a_bool_is_refused(label):
     """``labels=[True]`` was taken as label 1, and ``1.5`` cut to it: a
