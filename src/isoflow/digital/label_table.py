@@ -542,9 +542,9 @@ def unmasked(array, first_layer: int = 0, axis: int = 0) -> np.ndarray:
     [[[1, 1], [1, 1]]]
     """
     from ..errors import counted
-    from ..scale.arrays import is_masked_array
+    from ..scale.arrays import is_dask, is_masked_array, masked_remedy
 
-    dask = type(array).__module__.split(".")[0] == "dask"
+    dask = is_dask(array)
     if dask:
         array = array.compute()
     masked = int(np.ma.count_masked(array)) if is_masked_array(array) else 0
@@ -554,9 +554,7 @@ def unmasked(array, first_layer: int = 0, axis: int = 0) -> np.ndarray:
     at = ", ".join(str(int(i) + (first_layer if d == axis else 0)) for d, i in enumerate(voxel))
     layers = array.shape[axis]
     span = f"voxel layer {first_layer}" if layers == 1 else f"voxel layers {first_layer}-{first_layer + layers - 1}"
-    filled, data = ("dask.array.ma.filled(a, 0)", "dask.array.ma.getdata(a)") if dask else ("a.filled(0)", "a.data")
-    raise IsoflowError(f"voxel ({at}) is masked ({counted(masked, 'masked element')} in {span}); pass {filled} to "
-                       f"read the masked elements as 0 (background), or {data} to use the values stored under the mask")
+    raise IsoflowError(f"voxel ({at}) is masked ({counted(masked, 'masked element')} in {span}); {masked_remedy(dask)}")
 
 
 def _is_fill(value: np.floating, fill: object) -> bool:
@@ -804,11 +802,10 @@ def later_bytes(pieces: int, voxels_per_piece: float = 1.0) -> int:
 #: ``"auto"`` takes the label-by-label pass, once the pieces are counted,
 #: where they are this share of the voxels or more and the values
 #: :data:`FEW_VALUES` or fewer: a noisy segmentation of a few phases, whose
-#: one pass walks a piece a few voxels where ``analyze`` of each label
-#: sweeps its box once (128^3 of noise, one pass against label by label:
-#: 3 labels 1.28 against 0.57 s, 10 labels 2.34 against 0.98 s, 30 labels
-#: 2.56 against 1.51 s, 100 labels 2.62 against 2.83 s; three noisy
-#: phases, 0.14-0.17 pieces a voxel, 0.31-0.52 against 0.71-1.75 s)
+#: one pass walks a piece every few voxels where ``analyze`` of each label
+#: sweeps its box once; with many values, or fewer pieces (noisy phases of
+#: a smooth segmentation), the one pass is the sooner (the measures behind
+#: both bounds: docs/labels.md, "NumPy path")
 FRAGMENTED = 0.25
 FEW_VALUES = 32
 
@@ -1401,7 +1398,7 @@ def _box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: b
         found["b0"][row], found["b2"][row] = report["betti"][0], report["betti"][2]
         found["features"][row] = _report_features(report, box)
         found["doubled"][row] = report.get("doubled_edges", 0)
-        if report.surfaces is not None:  # the report's columns, not a dict a surface (noise: 100,000s a label)
+        if report.surfaces is not None:  # the report's columns: a label of noise has very many surfaces
             table = report.surfaces.columns()
             surfs.append((np.full(len(report.surfaces), row, np.int64), table["euler_characteristic"], table["faces"]))
     rows_chi_faces = [np.concatenate(c) if c else np.zeros(0, np.int64) for c in zip(*surfs)] or [np.zeros(0, np.int64)] * 3

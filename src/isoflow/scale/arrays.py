@@ -141,7 +141,7 @@ def as_array(array, where: str = "volume") -> np.ndarray:
     if read is not None:
         return read
     refuse_beyond_memory(array, where)
-    if type(array).__module__.split(".")[0] == "dask" and hasattr(array, "compute"):
+    if is_dask(array) and hasattr(array, "compute"):
         # one that read_anew leaves (its tasks run in other processes): computed as itself, where numpy.asarray
         # would give a masked block's data
         array = array.compute()
@@ -190,7 +190,7 @@ def read_anew(array: object, where: str = "volume") -> np.ndarray | None:
     >>> read.dtype.name, int(read.sum()), read.flags.owndata, read_anew(np.ones(3)) is None
     ('bool', 16, True, True)
     """
-    if type(array).__module__.split(".")[0] != "dask" or not hasattr(array, "store"):
+    if not is_dask(array) or not hasattr(array, "store"):
         return None
     shape = tuple(array.shape)  # type: ignore[attr-defined]
     if any(not np.isfinite(s) for s in shape):
@@ -262,9 +262,34 @@ def masked_blocks(where: str, masked: int, corner: tuple[int, ...] | None = None
     'volume: a dask array of masked blocks with 1 masked element'
     """
     at = "" if corner is None else f", the block at {corner}"
-    return (f"{where}: a dask array of masked blocks{at} with {counted(masked, 'masked element')}; pass "
-            "dask.array.ma.filled(a, 0) to read them as 0 (background), or dask.array.ma.getdata(a) to use the "
-            "values stored under the mask")
+    return (f"{where}: a dask array of masked blocks{at} with {counted(masked, 'masked element')}; "
+            + masked_remedy(True, "them"))
+
+
+def masked_remedy(dask: bool, what: str = "the masked elements") -> str:
+    """The two ways to read a masked array, or a dask array of masked
+    blocks (``dask``), that the refusals of its masked elements give.
+
+    Examples
+    --------
+    >>> masked_remedy(False)
+    'pass a.filled(0) to read the masked elements as 0 (background), or a.data to use the values stored under the mask'
+    """
+    filled, data = ("dask.array.ma.filled(a, 0)", "dask.array.ma.getdata(a)") if dask else ("a.filled(0)", "a.data")
+    return f"pass {filled} to read {what} as 0 (background), or {data} to use the values stored under the mask"
+
+
+def is_dask(array: object) -> bool:
+    """Whether ``array`` is one of dask's collections (told by its type's
+    module, so that dask is not imported to ask).
+
+    Examples
+    --------
+    >>> import dask.array as da
+    >>> is_dask(da.zeros(3)), is_dask(np.zeros(3))
+    (True, False)
+    """
+    return type(array).__module__.split(".")[0] == "dask"
 
 
 def _flat(keys):
@@ -414,10 +439,7 @@ def refuse_masked(array: object, where: str = "volume") -> None:
         return
     masked = int(np.ma.count_masked(array))
     if masked:
-        raise IsoflowError(
-            f"{where}: a masked array with {counted(masked, 'masked element')}; pass a.filled(0) to read the masked "
-            "elements as 0 (background), or a.data to use the values stored under the mask"
-        )
+        raise IsoflowError(f"{where}: a masked array with {counted(masked, 'masked element')}; {masked_remedy(False)}")
 
 
 #: elements of a float volume looked at at a time for values other than 0
