@@ -1,6 +1,9 @@
 """Shared shapes for the tests: digital balls, tori and rings built from
 their defining inequalities, so that their topology is known exactly."""
 
+import io
+import sys
+
 import numpy as np
 import pytest
 
@@ -129,3 +132,22 @@ def _fresh_tally():
     from isoflow.scale import compiled
 
     compiled.reset_tally()
+
+
+class Terminal(io.StringIO):
+    """A stderr that says it is a terminal and keeps what is written."""
+
+    def isatty(self):
+        return True
+
+
+def stderr_of(monkeypatch, stream, argv) -> str:
+    """What the command line ``argv`` writes on ``stream`` put in place of
+    stderr (a :class:`Terminal`: the progress bars), the command run in
+    this process and ending with status 0."""
+    from isoflow.cli import main
+
+    monkeypatch.setattr(sys, "stderr", stream)
+    assert main([str(a) for a in argv]) == 0
+    monkeypatch.undo()
+    return stream.getvalue()

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import torus
+from conftest import Terminal, stderr_of, torus
 
 import isoflow
 from isoflow.cli import main
@@ -31,20 +31,6 @@ COMMANDS = ("info", "surface", "voxelize", "genus", "flow", "completion")
 def isoflow_cmd(*args, **kwargs):
     return subprocess.run([sys.executable, "-m", "isoflow.cli", *map(str, args)],
                           capture_output=True, text=True, **kwargs)
-
-
-class Terminal(io.StringIO):
-    """A stderr that says it is a terminal and keeps what is written."""
-
-    def isatty(self):
-        return True
-
-
-def stderr_of(monkeypatch, stream, argv) -> str:
-    monkeypatch.setattr(sys, "stderr", stream)
-    assert main([str(a) for a in argv]) == 0
-    monkeypatch.undo()
-    return stream.getvalue()
 
 
 def test_version_is_the_installed_package_version(capsys):

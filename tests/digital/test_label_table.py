@@ -186,10 +186,10 @@ def test_the_graph_of_pieces_lets_each_block_of_pairs_go_before_it_returns(rng, 
         monkeypatch.setattr(pieces, "MAX_PIECE_VOXELS", 600)  # slabs of 3 layers
     made, seen = piece_graph.entries_graph, []
 
-    def watched(entries, n, none):
+    def watched(entries, n, none, ticks=None):
         assert slabs or all(keys.base is kind.base is sums.base for keys, kind, sums in entries)
         refs = [weakref.ref(a.base) for block in entries for a in block]
-        graph = made(entries, n, none)
+        graph = made(entries, n, none, ticks)
         seen.append((len(entries), sum(ref() is not None for ref in refs), len(refs)))
         return graph
 

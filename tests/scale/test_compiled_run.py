@@ -6,6 +6,7 @@ time starting threads), and an error raised only once every call is done."""
 
 from __future__ import annotations
 
+import signal
 import threading
 import time
 
@@ -73,3 +74,37 @@ def test_an_error_is_raised_once_every_call_is_done():
     with pytest.raises(ValueError, match="a pass failed"):
         compiled.run([(fails,), (slow,)])
     assert done == [True]  # nothing of the run left running behind the error
+
+
+@pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="an interval timer's signal")
+def test_an_interrupted_wait_stops_the_calls_and_returns_once_they_have():
+    """Ctrl-C lands in the waiting thread: the calls are asked to stop
+    (cancel.STOP, which the label table's passes look at) and the
+    interrupt goes on only once they have returned, with STOP as it was;
+    calls let run on would hold the process at its exit."""
+    from isoflow.scale import cancel
+
+    ended: list[float] = []
+
+    def until_stopped() -> None:
+        deadline = time.monotonic() + 20
+        while not cancel.STOP[0] and time.monotonic() < deadline:
+            time.sleep(0.005)
+        ended.append(time.monotonic())
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    before = signal.signal(signal.SIGALRM, interrupt)
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 0.3)
+        start = time.monotonic()
+        with pytest.raises(KeyboardInterrupt):
+            compiled.run([(until_stopped,)] * 2)
+        raised = time.monotonic()
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, before)
+    assert len(ended) == 2 and max(ended) <= raised  # both returned before the interrupt went on
+    assert raised - start < 10  # stopped, not run to their end
+    assert cancel.STOP[0] == 0  # not left set for the next work

@@ -265,6 +265,7 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     from ..mesh.formats.omezarr import stored_ndim
     from ..mesh.volumes import read_labels
     from .inputs import say_plate
+    from .progress import progress_bar
 
     refuse_single_label(args)
     asked = label_choice(args.labels)
@@ -307,9 +308,10 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
                  **({} if corners is None else {"corners": corners})}
         wanted = None if chosen is None else _by_type(args.input, chosen, image.array.dtype)[0]
         try:
-            return about, label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
-                                      surfaces=surfaces, threads=getattr(args, "threads", None), names=names,
-                                      background=background)
+            with progress_bar(args, "label table") as show:
+                return about, label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
+                                          surfaces=surfaces, threads=getattr(args, "threads", None), names=names,
+                                          background=background, progress=show)
         except IsoflowError as exc:  # work that would not fit: the line names the file, as a store's does
             raise exc.at(args.input) from None
 

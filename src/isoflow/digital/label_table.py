@@ -37,7 +37,7 @@ import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache, cached_property
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -55,6 +55,9 @@ from .lattice import DigitalObject
 from .report import Report
 from .surface import face_slots, pinch_lut, slot_octants
 from .units import unit_given
+
+if TYPE_CHECKING:
+    from ..scale.ticks import Ticks
 
 #: the columns of :func:`label_table`, in order ("bbox" and "centroid"
 #: stand for their numbered columns, "n" for n-0 .. n-8)
@@ -253,6 +256,7 @@ def label_table(
     threads: int | np.integer | None = None,
     names: Mapping[int, str] | Sequence[str] | None = None,
     background: bool = False,
+    progress: Callable[[int, int], object] | None = None,
 ) -> dict[str, np.ndarray]:
     """The shape report of every label of a 3D or 2D label image, as columns.
 
@@ -311,6 +315,12 @@ def label_table(
         ``labels=[0]`` gives it, in its place in increasing order), where
         any voxel is 0, from the same one pass: every label and the space
         around them (the table of ``info --labels 0-100000``).
+    progress : callable, optional
+        ``progress(done, total)``, called on the calling thread as the
+        work goes (``done`` rising to ``total``, which stays the same; its
+        units are shares of the work, not voxels or labels), as the
+        ``info --labels`` bar shows it. A 3D image only: a 2D table is
+        made in one NumPy pass.
 
     Returns
     -------
@@ -405,13 +415,13 @@ def label_table(
         return with_names(unheld_columns(planar_table(vol, conn, place.spacing, place.origin, wanted, background),
                                          place.origin, place.spacing, vol.shape), names)
     with using(threads):
-        found = table_rows(vol, conn, wanted, surfaces, background, method)
+        found = table_rows(vol, conn, wanted, surfaces, background, method, progress)
     return with_names(unheld_columns(columns(found, place.spacing, place.origin, surfaces), place.origin,
                                      place.spacing, vol.shape), names)
 
 
 def table_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool, background: bool,
-               method: str) -> dict:
+               method: str, progress: Callable[[int, int], object] | None = None) -> dict:
     """The rows by the pass that ``method`` takes (:func:`_use_compiled`):
     with ``"auto"``, where the compiled pass would not fit in memory (a
     label image of noise, whose pieces, nearly one a voxel, and their
@@ -419,22 +429,26 @@ def table_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
     (:func:`box_rows`), which needs tens and gives the same table; where
     neither fits, the compiled pass' refusal, which names what would. And
     where the pieces, once counted, say that pass is the sooner (a noisy
-    segmentation of a few labels, :data:`FRAGMENTED`)."""
+    segmentation of a few labels, :data:`FRAGMENTED`). ``progress``: as
+    :func:`label_table`'s, for the passes taken (:data:`STAGES`)."""
     from ..errors import DoesNotFit
+    from ..scale.ticks import Ticks
 
+    ticks = Ticks(progress, STAGES)
     if not _use_compiled(vol, method):
-        return box_rows(vol, conn, wanted, surfaces, background)
+        return box_rows(vol, conn, wanted, surfaces, background, ticks)
     first = None
     try:
-        found = piece_rows(vol, conn, wanted, surfaces, background, rather=method == "auto")
+        found = piece_rows(vol, conn, wanted, surfaces, background, rather=method == "auto", ticks=ticks)
         if found is not None:
+            ticks.finish()
             return found
     except DoesNotFit as refusal:
         if method != "auto":
             raise
         first = refusal
     try:
-        return box_rows(vol, conn, wanted, surfaces, background)
+        return box_rows(vol, conn, wanted, surfaces, background, ticks)
     except DoesNotFit:
         if first is None:
             raise
@@ -810,22 +824,34 @@ FRAGMENTED = 0.25
 FEW_VALUES = 32
 
 
+#: the shares of a label table's progress bar of each stage of its passes
+#: (:class:`~isoflow.scale.ticks.Ticks`): of the pieces, of the vertex pass
+#: over their blocks, of the graph of pieces, of the walks of the graph
+#: label by label; the label-by-label pass takes what is left where it
+#: takes over. Noise spends half its time in the graph and the walks, a
+#: grain map most of it in the vertex pass: the shares lie between
+STAGES = {"pieces": 10, "vertices": 45, "graph": 10, "walks": 35}
+
+
 def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool,
-               background: bool = False, rather: bool = False) -> dict | None:
+               background: bool = False, rather: bool = False, ticks: Ticks | None = None) -> dict | None:
     """The rows by the compiled passes: the pieces, one vertex pass, the
     graph of pieces label by label (see the module docs); an image of more
     voxels than the pieces are numbered in, in slabs along axis 0 as a
     store is read (:func:`slab_rows`). ``background``: with ``wanted``
     None, label 0's row too. With ``rather``: None where the pieces say
-    the label-by-label pass is the sooner (:data:`FRAGMENTED`)."""
+    the label-by-label pass is the sooner (:data:`FRAGMENTED`).
+    ``ticks``: the progress (:data:`STAGES`), and where the passes stop on
+    a signal."""
     from ..scale.pieces import MAX_PIECE_VOXELS, piece_runs, vertex_pass
 
     copy = 0 if vol.flags.c_contiguous else vol.nbytes
     check_fits(PIECE_BYTES_PER_VOXEL * vol.size + copy, f"the label table of a {'x'.join(map(str, vol.shape))} "
                f"label image", hint="store it as .zarr and run isoflow info --labels on that (block by block)")
     if vol.size > MAX_PIECE_VOXELS:
-        return slab_rows(np.ascontiguousarray(vol), conn, wanted, surfaces, [vol.shape[0]], background=background)
-    pieces = piece_runs(vol, later=later_bytes)
+        return slab_rows(np.ascontiguousarray(vol), conn, wanted, surfaces, [vol.shape[0]],
+                         progress=None if ticks is None else ticks.progress, background=background)
+    pieces = piece_runs(vol, later=later_bytes, ticks=ticks)
     if rather and pieces["n"] >= FRAGMENTED * vol.size and len(distinct(pieces["values"][1:])[0]) <= FEW_VALUES:
         return None
     if background:  # every label present, 0 among them: the pieces say which
@@ -833,8 +859,8 @@ def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
     want = wanted_pieces(pieces["values"], vol.dtype, wanted)
     # the pairs' blocks read where they are by the graph of pieces, not copied into one set of arrays first
     passed = vertex_pass(vol, pieces, want, feature_table(conn), pass_tables(conn, surfaces), keep_runs=False,
-                         joined=False)
-    return rows_of_pieces(pieces, passed, vol.dtype, conn, wanted)
+                         joined=False, ticks=ticks)
+    return rows_of_pieces(pieces, passed, vol.dtype, conn, wanted, ticks)
 
 
 def rows_in_image_order(found: dict, axes: Sequence[int]) -> dict:
@@ -971,15 +997,17 @@ def pass_tables(conn: int, surfaces: bool) -> tuple:
     return (np.zeros_like(tables[0]),) + tables[1:4] + (np.zeros_like(tables[4]), tables[5])
 
 
-def rows_of_pieces(pieces: dict, passed: dict, dtype, conn: int, wanted: np.ndarray | None) -> dict:
+def rows_of_pieces(pieces: dict, passed: dict, dtype, conn: int, wanted: np.ndarray | None,
+                   ticks: Ticks | None = None) -> dict:
     """The rows' sums from the pieces (values, counts, sums, boxes) and
-    what the vertex pass found (features, doubled edges, pairs)."""
+    what the vertex pass found (features, doubled edges, pairs);
+    ``ticks``: the progress of the graph and its walks."""
     from ..scale.piece_graph import grouped
 
     values, piece_label, rows = label_rows(pieces["values"], dtype, wanted)
     # every label's pieces, for its sums and for the graph (each label has one piece at least)
     by = grouped(piece_label[1:], len(values), np.arange(1, len(piece_label), dtype=np.int64))
-    topology = graph_topology(pieces, piece_label, rows, passed, conn, *by)
+    topology = graph_topology(pieces, piece_label, rows, passed, conn, *by, ticks=ticks)
     by_label = label_sums(pieces, piece_label, passed, len(values))
     found = {key: at_rows(column, rows) for key, column in by_label.items()}
     found.update(topology)
@@ -1076,7 +1104,7 @@ def label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, nlabels: int
 
 
 def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, passed: dict, conn: int,
-                   lab_start: np.ndarray, lab_pieces: np.ndarray) -> dict:
+                   lab_start: np.ndarray, lab_pieces: np.ndarray, ticks: Ticks | None = None) -> dict:
     """b0, b2 and the surfaces of every row from the graph of pieces (each
     label's pieces: ``lab_pieces[lab_start[l]:lab_start[l + 1]]``)."""
     from ..scale.piece_graph import entries_graph, label_topology
@@ -1085,13 +1113,13 @@ def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, pass
     n = len(piece_label)
     # the pairs handed over, not kept here: entries_graph lets each block go once it is placed
     if "entries" in passed:  # the vertex pass' blocks of pairs as they are (vertex_pass(..., joined=False))
-        graph = entries_graph(passed.pop("entries"), n, NONE)
+        graph = entries_graph(passed.pop("entries"), n, NONE, ticks)
     else:
-        graph = entries_graph([tuple(passed.pop(key) for key in ("keys", "kind", "sums"))], n, NONE)
+        graph = entries_graph([tuple(passed.pop(key) for key in ("keys", "kind", "sums"))], n, NONE, ticks)
     present = np.flatnonzero(rows >= 0)
     obj_kind, b0_kind, bg_kind, cc_kind = JOINS[conn]
     found = label_topology(rows[present].astype(np.int64), lab_start, lab_pieces, piece_label, pieces["lo"],
-                           pieces["hi"], *graph, obj_kind, b0_kind, bg_kind, cc_kind)
+                           pieces["hi"], *graph, obj_kind, b0_kind, bg_kind, cc_kind, ticks)
     b0, b2 = np.zeros(len(rows), np.int64), np.zeros(len(rows), np.int64)
     b0[present], b2[present] = found[0], found[1]
     return {"b0": b0, "b2": b2, "surface_rows": present[found[2]], "surface_chi": found[3],
@@ -1353,16 +1381,22 @@ def same_pieces(total: int, same: list) -> np.ndarray:
 
 
 def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool,
-             background: bool = False) -> dict:
+             background: bool = False, ticks: Ticks | None = None) -> dict:
     """The rows by NumPy: ``analyze`` of each label's box plus one voxel
     (outside the box everything is the label's complement, so the report
     is the whole image's), the voxels of every label from one sort;
-    ``background``: with ``wanted`` None, label 0's row too."""
+    ``background``: with ``wanted`` None, label 0's row too; ``ticks``:
+    the progress, the rest of it counted in labels."""
+    from ..scale.ticks import silent
+
     with budget_held():  # the memory available read once, for the sort's check and every box's
-        return _box_rows(vol, conn, wanted, surfaces, background)
+        found = _box_rows(vol, conn, wanted, surfaces, background, silent(ticks))
+    silent(ticks).finish()
+    return found
 
 
-def _box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool, background: bool) -> dict:
+def _box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool, background: bool,
+              ticks: Ticks) -> dict:
     """:func:`box_rows` within its budget."""
     from .analysis import analyze
 
@@ -1383,7 +1417,10 @@ def _box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: b
              "features": np.zeros((len(labels), 17), np.int64), "doubled": np.zeros(len(labels), np.int64),
              "b0": np.zeros(len(labels), np.int64), "b2": np.zeros(len(labels), np.int64)}
     surfs: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # per label: its rows, chi and faces
+    ticks.rest(len(labels))
     for row, label in enumerate(labels):
+        ticks.slot(0)[0] = row  # the labels done
+        ticks.add(0, 0)
         at = np.searchsorted(values, label)
         if at == len(values) or values[at] != label:
             continue

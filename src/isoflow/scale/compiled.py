@@ -57,6 +57,8 @@ from ..errors import IsoflowError, choice_of, given_text, whole_given
 if TYPE_CHECKING:
     import numpy as np
 
+    from .ticks import Ticks
+
 #: host volumes with at least this many voxels (126^3 and up) use the compiled
 #: passes (the histogram, the Betti numbers)
 MIN_VOXELS = 2_000_000
@@ -437,17 +439,23 @@ def _pool(size: int):
     return held[2]
 
 
-def run(calls: list) -> list:
+def run(calls: list, ticks: Ticks | None = None) -> list:
     """Run ``(fn, *args)`` calls, each on its own thread when there are
     several; results in order, once every call is done. The calls are
     compiled passes that release the GIL; one call runs on the calling
     thread, several on threads the calling thread keeps for its next
-    calls.
+    calls, while it waits: it says their progress (``ticks``) and, where
+    the wait is interrupted (Ctrl-C), asks them to stop
+    (:data:`~isoflow.scale.cancel.STOP`, which the label table's passes
+    look at as they count their work) and returns once they have.
 
     Parameters
     ----------
     calls : list of tuple
         ``(fn, *args)`` for each call.
+    ticks : Ticks, optional
+        The calls' progress (:class:`~isoflow.scale.ticks.Ticks`), said
+        every tenth of a second while they run.
 
     Returns
     -------
@@ -464,10 +472,38 @@ def run(calls: list) -> list:
         return [fn(*args) for fn, *args in calls]
     from concurrent.futures import wait
 
+    from .cancel import POLL, STOP
+
     pool = _pool(len(calls))
-    futures = [pool.submit(fn, *args) for fn, *args in calls]
-    wait(futures)  # no call left running when one fails, as a pool of its own would wait
+    futures = []
+    try:
+        futures.extend(pool.submit(fn, *args) for fn, *args in calls)
+        # no call left running when one fails, as a pool of its own would wait
+        while wait(futures, timeout=POLL)[1]:
+            if ticks is not None:
+                ticks.say()
+    except BaseException:
+        ours = not STOP[0]  # a signal handler may have set it already, for other work too
+        STOP[0] = 1
+        _wait_out(futures)
+        if ours:
+            STOP[0] = 0
+        raise
     return [f.result() for f in futures]
+
+
+def _wait_out(futures: list) -> None:
+    """Wait until every call has returned, whatever interrupts the wait
+    (people press Ctrl-C twice; ``timeout`` signals the command and then
+    its group): a call let run on would hold the process at its exit."""
+    from concurrent.futures import wait
+
+    while True:
+        try:
+            wait(futures)
+            return
+        except KeyboardInterrupt:
+            continue
 
 
 def run_ahead(calls: list, threads: int | None = None) -> Iterator:

@@ -39,6 +39,7 @@ import numpy as np
 
 from .jit import njit
 from .memory import check_fits, mapped
+from .ticks import Ticks, silent
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -407,10 +408,12 @@ def _next_walk(walk, most, stamp, stamp2):
 def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n, adj_q,
                 obj_kind, b0_kind, bg_kind, cc_kind, local, stamp, comp, stamp2, comp2, queue, heap, hkey, parent,
                 parent0, start, fill, members, blo, bhi, key, verts, quarters, order, b0, b2, srow, schi, sfaces,
-                most_walks):
+                most_walks, done, stop):
     """The loop of :func:`label_topology` over its rows, on scratch arrays
     (compiled without reference counting: nothing is allocated here).
-    Returns the number of surfaces.
+    Returns the number of surfaces. ``done[0]``: the rows done so far (for
+    a progress bar); it returns early, its rows unfinished, once
+    ``stop[0]`` is set (a signal: :data:`isoflow.scale.cancel.STOP`).
 
     The rest's components are walked from each of the label's components
     in turn, against that component's box; each walk's stamps are its
@@ -419,6 +422,9 @@ def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, a
     nsurf = 0
     walk = 0
     for r in range(len(rows)):
+        done[0] = r
+        if stop[0]:
+            return nsurf
         label = rows[r]
         own = lab_pieces[lab_start[label]:lab_start[label + 1]]
         m = len(own)
@@ -480,7 +486,7 @@ OWN_BYTES = 4 + 4 + 4 + 4 + 8
 
 
 def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n, adj_q,
-                   obj_kind, b0_kind, bg_kind, cc_kind) -> tuple[np.ndarray, ...]:
+                   obj_kind, b0_kind, bg_kind, cc_kind, ticks: Ticks | None = None) -> tuple[np.ndarray, ...]:
     """Per label index in ``rows``: b0 (components under ``b0_kind``), b2
     (enclosed components of the rest under ``cc_kind``), and the closed
     surfaces of its boundary mesh: the pairs (component of the label under
@@ -500,8 +506,11 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
     The labels are independent: the rows are cut into runs of about equal
     work (pieces and edges), each walked on a thread of its own
     with scratch of its own (:data:`TOPOLOGY_BYTES` per piece, :data:`OWN_BYTES`
-    per piece of the label of most pieces).
+    per piece of the label of most pieces). ``ticks``: the stage
+    ``"walks"`` of the progress, counted in labels, and where the walks
+    stop on a signal.
     """
+    from .cancel import STOP
     from .compiled import run, thread_count
 
     rows = np.asarray(rows, np.int64)
@@ -517,8 +526,11 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
     cuts = [0] + [int(np.searchsorted(work, work[-1] * t / threads)) for t in range(1, threads)] + [len(rows)]
     other = cc_kind != bg_kind
 
-    def walk(a: int, b: int) -> tuple[np.ndarray, ...]:
-        """Rows a .. b - 1 on scratch of their own."""
+    ticks = silent(ticks)
+    ticks.stage("walks", len(rows))
+
+    def walk(a: int, b: int, call: int) -> tuple[np.ndarray, ...]:
+        """Rows a .. b - 1 on scratch of their own, call ``call`` of the ticks."""
         part = rows[a:b]
         total = int(per_label[part].sum()) if len(part) else 0
         most = int(per_label[part].max(initial=0))
@@ -533,11 +545,13 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
         surf = [np.empty(total, np.int64) for _ in range(3)]  # written up to the surfaces found, read no further
         nsurf = _label_loop(part, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n,
                             adj_q, obj_kind, b0_kind, bg_kind, cc_kind, local, *stamps, queue, heap, hkey, parent,
-                            parent0, *grouping, *small, b0, b2, *surf, MOST_WALKS)
+                            parent0, *grouping, *small, b0, b2, *surf, MOST_WALKS, ticks.slot(call), STOP)
+        ticks.slot(call)[0] = len(part)
+        ticks.add(call, 0)  # (where the loop stopped early, Stopped)
         surf[0][:nsurf] += a  # rows of the whole
         return (b0, b2) + tuple(s[:nsurf] for s in surf)
 
-    found = run([(walk, a, b) for a, b in zip(cuts[:-1], cuts[1:])])
+    found = run([(walk, a, b, t) for t, (a, b) in enumerate(zip(cuts[:-1], cuts[1:]))], ticks)
     return tuple(np.concatenate([f[k] for f in found]) for k in range(5))
 
 
@@ -730,7 +744,8 @@ def pair_graph(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray, n: int,
     return entries_graph([(keys, kind, sums)], n, none)
 
 
-def entries_graph(entries: list, n: int, none: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def entries_graph(entries: list, n: int, none: int,
+                  ticks: Ticks | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`pair_graph` of pairs held in several sets of arrays
     (``entries``: ``(keys, kind, sums)`` each, in order; the blocks of
     entries that the vertex pass writes out, read where they are rather
@@ -745,6 +760,9 @@ def entries_graph(entries: list, n: int, none: int) -> tuple[np.ndarray, np.ndar
     that nothing else holds (the vertex pass' blocks, each in pages of its
     own) is then given back to the system while the graph's pages fill,
     so that the pairs and the whole graph are not held at once.
+    ``ticks``: the stage ``"graph"`` of the progress, counted in pairs
+    (each twice: counted, then placed), and where the work stops on a
+    signal.
 
     Examples
     --------
@@ -765,12 +783,18 @@ def entries_graph(entries: list, n: int, none: int) -> tuple[np.ndarray, np.ndar
     parts = _cut_entries(entries, sizes, [total * t // threads for t in range(threads + 1)])
     entries.clear()  # the runs' parts hold the blocks now, each let go where it is placed
     degrees = [np.zeros(n + 1, np.int64) for _ in parts]
+    ticks = silent(ticks)
+    ticks.stage("graph", 2 * total)
 
-    def count(part: list, counts: np.ndarray) -> int:
+    def count(part: list, counts: np.ndarray, call: int) -> int:
         """The edges of a run of pairs, counted per piece."""
-        return sum(_pair_degrees(keys, kind, sums, none, counts) for keys, kind, sums in part)
+        edges = 0
+        for keys, kind, sums in part:
+            edges += _pair_degrees(keys, kind, sums, none, counts)
+            ticks.add(call, len(keys))
+        return edges
 
-    touching = sum(run([(count, part, counts) for part, counts in zip(parts, degrees)]))
+    touching = sum(run([(count, part, counts, t) for t, (part, counts) in enumerate(zip(parts, degrees))], ticks))
     adj_start = np.cumsum(degrees[0] if len(degrees) == 1 else np.sum(degrees, axis=0))
     fills = [adj_start[:-1].copy()]
     for counts in degrees[:-1]:  # a run's edges of a piece after those of the runs before
@@ -782,15 +806,16 @@ def entries_graph(entries: list, n: int, none: int) -> tuple[np.ndarray, np.ndar
     adj = (adj_start, mapped(touching, np.uint32), mapped(touching, np.uint8), mapped(touching, np.uint32),
            mapped(touching, np.uint32))
 
-    def place(part: list, fill: np.ndarray) -> None:
+    def place(part: list, fill: np.ndarray, call: int) -> None:
         """The edges of a run of pairs at their pieces' places, each part
         of a block let go once placed (the block's pages go with the last)."""
         while part:
             keys, kind, sums = part.pop(0)
             _fill_pair_graph(keys, kind, sums, none, fill, *adj[1:])
+            ticks.add(call, len(keys))
             del keys, kind, sums
 
-    run([(place, part, fill) for part, fill in zip(parts, fills)])
+    run([(place, part, fill, t) for t, (part, fill) in enumerate(zip(parts, fills))], ticks)
     return adj
 
 

@@ -53,6 +53,7 @@ from .compiled import run, slabs, thread_count
 from .jit import njit
 from .kernels import union
 from .memory import Growable, check_fits, mapped
+from .ticks import Ticks, layer_step, silent
 
 #: the key of an empty slot of the pair table
 EMPTY = np.uint64(0xFFFFFFFFFFFFFFFF)
@@ -521,7 +522,8 @@ MAX_PIECE_VOXELS = 0xFFFFFFFF - 1
 
 
 def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: int = 0,
-               axis: str = "its first axis", later: Callable[[int, float], int] | None = None, before: int = 0) -> dict:
+               axis: str = "its first axis", later: Callable[[int, float], int] | None = None, before: int = 0,
+               ticks: Ticks | None = None) -> dict:
     """The 6-connected pieces of every value of a 3D integer image, as runs.
 
     A run is a maximal stretch of one value along a row of the last axis;
@@ -540,7 +542,10 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     ``before`` more (those of the slabs read before): checked with the
     statistics, as soon as the
     pieces are counted, so that an image of too many pieces (noise) is
-    refused before the passes that would not fit.
+    refused before the passes that would not fit. ``ticks``: the stage
+    ``"pieces"`` of their progress, counted in voxel layers
+    (:class:`~isoflow.scale.ticks.Ticks`), and where the work stops on a
+    signal.
 
     The runs of each slab of layers are found and joined with the rows
     before them on a thread of their own, the slabs' seams joined after.
@@ -553,7 +558,10 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     flat, w = value_bytes(flat_vol.reshape(-1)).reshape(-1), flat_vol.dtype.itemsize
     offsets = np.zeros(nx * ny + 1, np.int64)
     parts = slabs(nx, thread_count(flat_vol.size)) if flat_vol.size else []
-    found = run([(_slab_pieces, flat, w, ny, nz, lo, hi, offsets, axis) for lo, hi in parts])
+    ticks = silent(ticks)
+    ticks.stage("pieces", nx)
+    found = run([(_slab_pieces, flat, w, ny, nz, lo, hi, offsets, axis, ticks, t) for t, (lo, hi) in enumerate(parts)],
+                ticks)
     at = np.cumsum([0] + [used for _, _, used in found]).tolist()
     total = at[-1]
     if found:  # the first slab's buffers become the whole's, in place (its runs are numbered from 0 already)
@@ -595,23 +603,31 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
 
 
 def _slab_pieces(flat: np.ndarray, w: int, ny: int, nz: int, x_lo: int, x_hi: int, offsets: np.ndarray,
-                 axis: str = "its first axis") -> tuple[Growable, Growable, int]:
+                 axis: str, ticks: Ticks, call: int) -> tuple[Growable, Growable, int]:
     """The runs of one slab of layers, joined within it (slab-local
     indices), in buffers that grow as they fill: ``(starts, parent,
-    used)``, the runs the first ``used`` entries of each."""
+    used)``, the runs the first ``used`` entries of each. Its layers are
+    read a step at a time (:func:`layer_step`), each counted as call
+    ``call`` of ``ticks``."""
     size = max(nz, (x_hi - x_lo) * ny * nz // 16)
     buffers = Growable(size, np.int32), Growable(size, np.uint32)
     words = np.zeros(max(MARK_VOXELS, nz) // 64 + 2, np.uint64)
     layer = np.zeros((ny, (nz + 63) // 64), np.uint64)  # a bit per voxel of a layer
     row_bits, equal = np.zeros(layer.shape[1], np.uint64), np.zeros(layer.shape[1], np.uint64)
     used, x, y = 0, x_lo, 0
+    step = layer_step(ny * nz)
     while True:
         starts, parent = (buffer.array() for buffer in buffers)
-        used, x, y = _slab_runs(flat, w, ny, nz, x_lo, x_hi, x, y, offsets, starts, parent, used, words, layer,
+        upto = min(x_hi, x + step)
+        was = x
+        used, x, y = _slab_runs(flat, w, ny, nz, x_lo, upto, x, y, offsets, starts, parent, used, words, layer,
                                 row_bits, equal)
         del starts, parent  # no array of the buffers held: they grow in place
+        ticks.add(call, x - was)
         if x == x_hi:
             return (*buffers, used)
+        if x == upto:  # a step done, the buffers not full
+            continue
         size = min(2 * size, (x_hi - x_lo) * ny * nz)
         check_layers(RUN_BYTES * size, f"the runs of {counted(x_hi - x_lo, 'layer')} of a label image", x_hi - x_lo, axis=axis)
         for buffer in buffers:
@@ -1291,7 +1307,8 @@ def _deferred(deferred, count, pvalues, vbase, flat, ny, nz, a, nx, i, j, want, 
 
 def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.ndarray, sheet_tables,
                 layers: tuple[int, int] | None = None, nx: int | None = None, x0: int = 0, base: int = 0,
-                keep_runs: bool = True, axis: str = "its first axis", joined: bool = True) -> dict:
+                keep_runs: bool = True, axis: str = "its first axis", joined: bool = True,
+                ticks: Ticks | None = None) -> dict:
     """The vertex pass (see the module docs) over a slab of a label image.
 
     ``values``: the slab (voxel layers ``x0 ..`` of a volume of ``nx``
@@ -1316,6 +1333,8 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     blocks the threads wrote them out in, not copied into one set of
     arrays: ``entries``, a list of ``(keys, kind, sums)`` in place of the
     three (:func:`isoflow.scale.piece_graph.entries_graph` reads them so).
+    ``ticks``: the stage ``"vertices"`` of the progress, counted in vertex
+    layers, and where the work stops on a signal.
     """
     flat = unsigned(values)
     nxs, ny, nz = flat.shape
@@ -1354,16 +1373,20 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
         sink = PairSink(top, base, len(parts), axis)
         used, i, j, end = 0, lo + parts[t][0], 0, lo + parts[t][1]
         while i < end:
-            at = (i, j)
-            used, i, j = _vertex_rows(*args, i, end, j, wanted[windows[t][0]:], base, base + windows[t][0],
+            at, upto = (i, j), min(end, i + step)
+            used, i, j = _vertex_rows(*args, i, upto, j, wanted[windows[t][0]:], base, base + windows[t][0],
                                       features[t], table_of, sheets, doubled[t], contact, sink.pairs,
                                       sink.near, used, *put_off, scratch)
-            if i < end:  # the table is full: the pairs behind the sweep out, a larger table if none were
+            ticks.add(t, i - at[0])
+            if i < upto:  # the table is full: the pairs behind the sweep out, a larger table if none were
                 used = sink.drain(used, i - 1, grow=(i, j) == at)
         sink.drain(used, None)
         return sink.blocks
 
-    filled = run([(call, t, args) for t in range(len(parts))])
+    ticks = silent(ticks)
+    ticks.stage("vertices", hi - lo)
+    step = layer_step((ny + 1) * (nz + 1))
+    filled = run([(call, t, args) for t in range(len(parts))], ticks)
     del args  # the runs: let go here where the caller lets them go
     if not keep_runs:
         for key in ("starts", "runs"):

@@ -1,0 +1,136 @@
+"""Progress of passes on threads, and where they stop.
+
+Each call of a pass counts its own work where it does it, in a slot of
+its own (a compiled loop writes it as it goes); the thread that waits for
+the calls (:func:`isoflow.scale.compiled.run`) says their sum every tenth
+of a second, so that a progress bar is fed from one thread only. Where a
+call counts work it also looks at :data:`isoflow.scale.cancel.STOP` and
+ends there (:class:`~isoflow.scale.cancel.Stopped`) once a signal set it:
+a long pass stops within one of its steps, not at its end.
+
+A pass of several stages (a label table: its pieces, the vertex pass, the
+graph of pieces, the walks) gives each stage a share of one total, so
+that one bar goes once from 0 to 100 %.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable, Mapping
+
+import numpy as np
+
+from .cancel import STOP, Stopped
+
+#: int64 slots between two calls' counters: each on a cache line of its own
+SPACING = 8
+
+#: calls of one stage that count at once (a thread each)
+MOST_CALLS = 64
+
+
+#: voxels of a step of a pass between two counts (and looks at a stop): a
+#: step is then a small share of what a bar shows, and a stop comes soon
+STEP_VOXELS = 1 << 20
+
+
+def layer_step(layer: int) -> int:
+    """The layers of ``layer`` voxels each in a step (one at least).
+
+    Examples
+    --------
+    >>> layer_step(512 * 512), layer_step(4096 * 4096)
+    (4, 1)
+    """
+    return max(1, STEP_VOXELS // max(int(layer), 1))
+
+
+class Ticks:
+    """``progress(done, total)`` of work in stages, counted on threads and
+    said on the thread that makes the ticks (which waits for the others).
+
+    Parameters
+    ----------
+    progress : callable or None
+        Told ``(done, total)`` as the work goes, ``done`` rising, ``total``
+        the sum of ``shares``; None: only the stops are looked at.
+    shares : mapping of str to int
+        Each stage's share of the total, in the order of the stages.
+
+    Examples
+    --------
+    >>> said = []
+    >>> ticks = Ticks(lambda done, total: said.append((done, total)), {"read": 20, "sum": 80})
+    >>> ticks.stage("read", 4)
+    >>> ticks.add(0, 2); ticks.add(1, 2)
+    >>> ticks.stage("sum", 10)
+    >>> ticks.slot(0)[0] = 5  # as a compiled loop writes it
+    >>> ticks.say(); ticks.finish()
+    >>> said
+    [(0, 100), (10, 100), (20, 100), (60, 100), (100, 100)]
+    """
+
+    def __init__(self, progress: Callable[[int, int], object] | None, shares: Mapping[str, int]) -> None:
+        self.progress, self.shares = progress, dict(shares)
+        self.total = sum(self.shares.values())
+        self.slots = np.zeros(SPACING * MOST_CALLS, np.int64)
+        self.base, self.share, self.size, self.told = 0, 0, 1, -1
+        self.owner = threading.get_ident()  # the thread that says the progress
+
+    def stage(self, name: str, size: int) -> None:
+        """Begin stage ``name`` of ``size`` units of work, the one before
+        it done."""
+        self.base += self.share
+        self.share, self.size = self.shares.get(name, 0), max(int(size), 1)
+        self.slots[:] = 0
+        self.say()
+
+    def rest(self, size: int) -> None:
+        """Begin a stage of ``size`` units that takes all the shares left
+        (the work done another way from here on)."""
+        self.base += self.share
+        self.share, self.size = self.total - self.base, max(int(size), 1)
+        self.slots[:] = 0
+        self.say()
+
+    def slot(self, call: int) -> np.ndarray:
+        """Call ``call``'s counter of this stage, one int64 (a compiled
+        loop writes its count there)."""
+        return self.slots[SPACING * call:SPACING * call + 1]
+
+    def add(self, call: int, units: int) -> None:
+        """Count ``units`` more done by call ``call``, said at once where
+        the call runs on the thread that made these ticks (which then has
+        no wait in which to say it); :class:`~isoflow.scale.cancel.Stopped`
+        where a stop was asked."""
+        self.slots[SPACING * call] += units
+        if threading.get_ident() == self.owner:
+            self.say()
+        stop_here()
+
+    def say(self) -> None:
+        """Tell ``progress`` the work done, where more than it was told."""
+        if self.progress is None:
+            return
+        done = self.base + self.share * min(int(self.slots[::SPACING].sum()), self.size) // self.size
+        if done > self.told:
+            self.told = done
+            self.progress(done, self.total)
+
+    def finish(self) -> None:
+        """All the work done."""
+        self.base, self.share, self.size = self.total, 0, 1
+        self.say()
+
+
+def stop_here() -> None:
+    """:class:`~isoflow.scale.cancel.Stopped` where a stop was asked
+    (:func:`~isoflow.scale.cancel.request_stop`: a signal)."""
+    if STOP[0]:
+        raise Stopped
+
+
+def silent(ticks: Ticks | None) -> Ticks:
+    """``ticks``, or where None, ticks that tell no one (the stops are
+    looked at all the same)."""
+    return Ticks(None, {}) if ticks is None else ticks
