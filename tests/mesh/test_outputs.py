@@ -378,13 +378,17 @@ def ended_pid() -> int:
 
 def old_store(directory: Path, pid: int, random: str = "0123abcd", content: bytes = b"the previous store",
               suffix: str = ".zarr") -> Path:
-    """A store moved aside by a command (of ``pid``) that was to replace
-    ``store.zarr``: named as ``isoflow.mesh.outputs.aside_name`` names it."""
+    """A store (a file, for another ``suffix``) moved aside by a command
+    (of ``pid``) that was to replace ``store.zarr``: named as
+    ``isoflow.mesh.outputs.aside_name`` names it."""
     import hashlib
     import socket
 
     host = hashlib.sha1(socket.gethostname().encode()).hexdigest()[:8]
     aside = directory / f".store.isoflow-old-{host}-{pid}-{random}{suffix}"  # as docs/cli.md names it
+    if not suffix.endswith(".zarr"):  # a file
+        aside.write_bytes(content)
+        return aside
     (aside / "0").mkdir(parents=True)
     (aside / ".zgroup").write_text('{"zarr_format": 2}')
     (aside / "0" / "0.0.0").write_bytes(content)
@@ -405,21 +409,41 @@ def voxelize_store(tmp_path: Path, *extra: str) -> subprocess.CompletedProcess:
                            "-o", str(tmp_path / "store.zarr"), *extra], capture_output=True, text=True, timeout=300)
 
 
-def test_a_store_moved_aside_by_a_killed_command_is_put_back_not_deleted(tmp_path):
-    """Killed outright between moving the old store aside and renaming the
-    new one in, a command left ``store.zarr`` missing and the previous
+@pytest.mark.parametrize("command", ["store", "labels", "surface"])
+def test_an_output_moved_aside_by_a_killed_command_is_put_back_not_deleted(tmp_path, command):
+    """Killed outright between moving the old output aside and renaming
+    the new one in, a command left ``store.zarr`` missing and the previous
     store at its aside name only: the next command that writes it puts it
     back, whole, says so in one line, and then refuses to overwrite it
-    without --force, as it would have before the kill."""
-    aside = old_store(tmp_path, ended_pid())
-    before = tree(aside)
-    r = voxelize_store(tmp_path)
+    without --force, as it would have before the kill. So for a store
+    written slab by slab, a label image's store, and a file (a flow's
+    step file moved aside where a store was staged in its place)."""
+    import sys
+
+    import trimesh
+
+    if command == "surface":
+        np.save(tmp_path / "t.npy", torus(6, 2))
+        aside = old_store(tmp_path, ended_pid(), content=b"the previous surface", suffix=".ply")
+        before = {"": b"the previous surface"}
+        argv = ["surface", str(tmp_path / "t.npy"), "-o", str(tmp_path / "store.ply")]
+    else:
+        aside = old_store(tmp_path, ended_pid())
+        before = tree(aside)
+        meshes = [tmp_path / "box.stl"] + ([tmp_path / "box2.stl"] if command == "labels" else [])
+        trimesh.creation.box(extents=(1, 1, 1)).export(meshes[0])
+        trimesh.creation.box(extents=(1, 1, 1), transform=trimesh.transformations.translation_matrix((2, 0, 0))).export(
+            tmp_path / "box2.stl")
+        argv = ["voxelize", *map(str, meshes), "--pitch", "0.25", "-o", str(tmp_path / "store.zarr")]
+    out = tmp_path / ("store.ply" if command == "surface" else "store.zarr")
+    r = subprocess.run([sys.executable, "-m", "isoflow", *argv], capture_output=True, text=True, timeout=300)
     assert r.returncode == 2, r.stderr
     assert "Traceback" not in r.stderr
     warned = [line for line in r.stderr.splitlines() if "warning" in line]
-    assert len(warned) == 1 and "store.zarr" in warned[0] and aside.name in warned[0], r.stderr
-    assert "store.zarr: exists; pass --force to overwrite" in r.stderr
-    assert not aside.exists() and tree(tmp_path / "store.zarr") == before
+    assert len(warned) == 1 and out.name in warned[0] and aside.name in warned[0], r.stderr
+    assert f"{out.name}: exists; pass --force to overwrite" in r.stderr
+    assert not aside.exists()
+    assert (tree(out) if out.is_dir() else {"": out.read_bytes()}) == before
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".store.")]
 
 

@@ -403,10 +403,10 @@ def remove_abandoned(path: str | os.PathLike) -> list[Path]:
       removal was cut short: it is removed. Where ``path`` is missing the
       process was killed between the two renames and the aside is the only
       copy: it is renamed back to ``path``, as it was, with a warning line
-      naming both. Of several for one missing path (each left by a kill
-      with no write of ``path`` between, as only an older isoflow let
-      happen) the newest by its modification time is put back: the others
-      are earlier outputs, replaced on request since, and are removed.
+      naming both. Of several for one missing path (two commands that
+      replaced it at once, both killed) the newest by its modification
+      time is put back: the others are earlier outputs, replaced on
+      request since, and are removed.
       A name too long for an aside's to hold it whole (over about 215
       bytes) could be another output's shortened the same way: its asides
       are left alone.
@@ -565,8 +565,6 @@ def _link_back(aside: Path, path: Path) -> None:
     is still missing)."""
     try:
         os.link(aside, path, follow_symlinks=False)
-    except FileExistsError:
-        raise
     except OSError:
         if os.path.lexists(path):
             raise
