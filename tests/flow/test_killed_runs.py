@@ -82,3 +82,41 @@ def test_a_killed_runs_staging_directory_is_removed_by_the_next_run(tmp_path):
     assert stages(out) == []
     assert sorted(p.name for p in out.glob("step_*.ply")) == ["step_000.ply", "step_001.ply", "step_002.ply"]
 
+
+
+def test_a_killed_commits_step_entries_moved_aside_are_put_back_or_removed(tmp_path):
+    """A run killed while it put its files in place (between moving a
+    previous run's step store aside and renaming its own in) left that
+    store at its hidden aside name alone: the next run into the directory
+    puts it back under its name, whole, and removes the aside of a step
+    whose new entry was in place, before it decides that the directory
+    holds files."""
+    import hashlib
+    import os
+    import socket
+
+    out = tmp_path / "run"
+    out.mkdir()
+    ended = subprocess.Popen([sys.executable, "-c", "pass"])
+    ended.wait()  # its pid is free now (until reused)
+    host = hashlib.sha1(socket.gethostname().encode()).hexdigest()[:8]
+    # named as isoflow.mesh.outputs.aside_name names them (docs/cli.md)
+    missing = out / f".step_003.isoflow-old-{host}-{ended.pid}-0123abcd.zarr"
+    (missing / "0").mkdir(parents=True)
+    (missing / ".zgroup").write_text('{"zarr_format": 2}')
+    (missing / "0" / "0.0.0").write_bytes(b"the previous run's step 3")
+    replaced = out / f".step_002.isoflow-old-{host}-{ended.pid}-4567abcd.ply"
+    replaced.write_bytes(b"the previous run's step 2")
+    (out / "step_002.ply").write_bytes(b"the killed run's step 2, in place")
+    running = out / f".step_004.isoflow-old-{host}-{os.getpid()}-89abcdef.ply"
+    running.write_bytes(b"a running command's")
+    np.save(tmp_path / "ball.npy", ball(8))
+    rerun = subprocess.run([sys.executable, "-m", "isoflow.cli", "flow", str(tmp_path / "ball.npy"), "--out",
+                            str(out), "--steps", "1", "-q"], capture_output=True, text=True, timeout=300)
+    assert rerun.returncode == 2, rerun.stderr
+    assert "directory is not empty; pass --force" in rerun.stderr and "Traceback" not in rerun.stderr
+    warned = [line for line in rerun.stderr.splitlines() if "warning" in line]
+    assert len(warned) == 1 and "step_003.zarr" in warned[0] and missing.name in warned[0], rerun.stderr
+    assert (out / "step_003.zarr" / "0" / "0.0.0").read_bytes() == b"the previous run's step 3"
+    assert sorted(p.name for p in out.iterdir()) == sorted(["step_002.ply", "step_003.zarr", running.name])
+    assert running.read_bytes() == b"a running command's"

@@ -367,6 +367,123 @@ def test_a_killed_writers_temporaries_are_removed_by_the_next_write(tmp_path):
     assert trimesh.load(out, process=False).is_watertight
 
 
+def ended_pid() -> int:
+    """The pid of a process that has ended (free until reused)."""
+    import sys
+
+    ended = subprocess.Popen([sys.executable, "-c", "pass"])
+    ended.wait()
+    return ended.pid
+
+
+def old_store(directory: Path, pid: int, random: str = "0123abcd", content: bytes = b"the previous store",
+              suffix: str = ".zarr") -> Path:
+    """A store (a file, for another ``suffix``) moved aside by a command
+    (of ``pid``) that was to replace ``store.zarr``: named as
+    ``isoflow.mesh.outputs.aside_name`` names it."""
+    import hashlib
+    import socket
+
+    host = hashlib.sha1(socket.gethostname().encode()).hexdigest()[:8]
+    aside = directory / f".store.isoflow-old-{host}-{pid}-{random}{suffix}"  # as docs/cli.md names it
+    if not suffix.endswith(".zarr"):  # a file
+        aside.write_bytes(content)
+        return aside
+    (aside / "0").mkdir(parents=True)
+    (aside / ".zgroup").write_text('{"zarr_format": 2}')
+    (aside / "0" / "0.0.0").write_bytes(content)
+    return aside
+
+
+def tree(directory: Path) -> dict:
+    return {str(p.relative_to(directory)): p.read_bytes() for p in sorted(directory.rglob("*")) if p.is_file()}
+
+
+def voxelize_store(tmp_path: Path, *extra: str) -> subprocess.CompletedProcess:
+    import sys
+
+    import trimesh
+
+    trimesh.creation.box(extents=(1, 1, 1)).export(tmp_path / "box.stl")
+    return subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(tmp_path / "box.stl"), "--pitch", "0.25",
+                           "-o", str(tmp_path / "store.zarr"), *extra], capture_output=True, text=True, timeout=300)
+
+
+@pytest.mark.parametrize("command", ["store", "labels", "surface"])
+def test_an_output_moved_aside_by_a_killed_command_is_put_back_not_deleted(tmp_path, command):
+    """Killed outright between moving the old output aside and renaming
+    the new one in, a command left ``store.zarr`` missing and the previous
+    store at its aside name only: the next command that writes it puts it
+    back, whole, says so in one line, and then refuses to overwrite it
+    without --force, as it would have before the kill. So for a store
+    written slab by slab, a label image's store, and a file (a flow's
+    step file moved aside where a store was staged in its place)."""
+    import sys
+
+    import trimesh
+
+    if command == "surface":
+        np.save(tmp_path / "t.npy", torus(6, 2))
+        aside = old_store(tmp_path, ended_pid(), content=b"the previous surface", suffix=".ply")
+        before = {"": b"the previous surface"}
+        argv = ["surface", str(tmp_path / "t.npy"), "-o", str(tmp_path / "store.ply")]
+    else:
+        aside = old_store(tmp_path, ended_pid())
+        before = tree(aside)
+        meshes = [tmp_path / "box.stl"] + ([tmp_path / "box2.stl"] if command == "labels" else [])
+        trimesh.creation.box(extents=(1, 1, 1)).export(meshes[0])
+        trimesh.creation.box(extents=(1, 1, 1), transform=trimesh.transformations.translation_matrix((2, 0, 0))).export(
+            tmp_path / "box2.stl")
+        argv = ["voxelize", *map(str, meshes), "--pitch", "0.25", "-o", str(tmp_path / "store.zarr")]
+    out = tmp_path / ("store.ply" if command == "surface" else "store.zarr")
+    r = subprocess.run([sys.executable, "-m", "isoflow", *argv], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2, r.stderr
+    assert "Traceback" not in r.stderr
+    warned = [line for line in r.stderr.splitlines() if "warning" in line]
+    assert len(warned) == 1 and out.name in warned[0] and aside.name in warned[0], r.stderr
+    assert f"{out.name}: exists; pass --force to overwrite" in r.stderr
+    assert not aside.exists()
+    assert (tree(out) if out.is_dir() else {"": out.read_bytes()}) == before
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".store.")]
+
+
+def test_an_aside_left_beside_its_new_store_is_removed(tmp_path):
+    """Killed after the new store was in place, before the old one's
+    removal: the aside is removed and the store in place left alone."""
+    aside = old_store(tmp_path, ended_pid())
+    new = tmp_path / "store.zarr"
+    new.mkdir()
+    (new / ".zgroup").write_text('{"zarr_format": 2, "the": "new one"}')
+    r = voxelize_store(tmp_path)
+    assert r.returncode == 2 and "store.zarr: exists; pass --force to overwrite" in r.stderr, r.stderr
+    assert "warning" not in r.stderr
+    assert not aside.exists()
+    assert tree(new) == {".zgroup": b'{"zarr_format": 2, "the": "new one"}'}
+
+
+def test_only_the_newest_of_the_dead_asides_is_put_back_and_a_running_ones_is_left(tmp_path):
+    """A running command's aside is its own, whatever the state of the
+    path: left alone, and so is another store's (``store.b.zarr``'s aside
+    ends in ``RANDOM.b.zarr``). Of two left by killed commands for the
+    missing store, the newer is put back and the older, an output replaced
+    since, removed."""
+    dead = ended_pid()
+    running = old_store(tmp_path, os.getpid(), "89abcdef", b"a running command's")
+    other = old_store(tmp_path, dead, "76543210", b"store.b.zarr's", suffix=".b.zarr")
+    os.utime(other, (1_800_000_000, 1_800_000_000))
+    older = old_store(tmp_path, dead, "01234567", b"replaced since")
+    newer = old_store(tmp_path, dead, "fedcba98", b"the last store")
+    os.utime(older, (1_000_000_000, 1_000_000_000))
+    os.utime(newer, (1_500_000_000, 1_500_000_000))
+    os.utime(running, (1_700_000_000, 1_700_000_000))  # the newest of all, and not this command's to take
+    r = voxelize_store(tmp_path)
+    assert r.returncode == 2 and "store.zarr: exists; pass --force to overwrite" in r.stderr, r.stderr
+    assert (tmp_path / "store.zarr" / "0" / "0.0.0").read_bytes() == b"the last store"
+    assert not older.exists() and not newer.exists()
+    assert (running / "0" / "0.0.0").read_bytes() == b"a running command's"
+    assert (other / "0" / "0.0.0").read_bytes() == b"store.b.zarr's"
+
+
 @pytest.mark.skipif(not Path("/proc/self/fd").is_dir(), reason="names an fsync's directory by /proc/self/fd")
 @pytest.mark.parametrize("command", ["labels", "flow"])
 def test_a_new_output_directory_is_flushed_into_its_parent(tmp_path, monkeypatch, command):

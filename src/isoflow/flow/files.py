@@ -31,6 +31,7 @@ from ..digital.surface import boundary_mesh
 from ..errors import IsoflowError, some_of, warn
 from ..mesh import export
 from ..mesh.outputs import (
+    abandoned_asides,
     aside_name,
     atomic_write,
     check_writable_dir,
@@ -289,6 +290,12 @@ def check_output_dir(directory, force: bool = False):
         raise IsoflowError(f"{out.parent}: no such directory (for the output directory {out.name})")
     if out.is_dir():  # a killed run's staging directory does not make it taken
         remove_abandoned(out / STAGE)
+        # a run killed while it put its files in place left the previous run's entries it moved aside:
+        # each is put back where its name is empty, else removed, before the directory's files are counted
+        steps = _step_file_pattern()
+        for entry in abandoned_asides(out):
+            if steps.fullmatch(entry.name) or entry.name in RUN_FILES:
+                remove_abandoned(entry)
     if out.is_dir() and any(out.iterdir()) and not force:
         raise IsoflowError.worded(f"{out}: directory is not empty; pass force=True to overwrite its files",
                                   f"{out}: directory is not empty; pass --force to overwrite its files")

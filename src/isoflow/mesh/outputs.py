@@ -33,10 +33,14 @@ import sys
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-from ..errors import IsoflowError, NotAPath, check_switch, refuse_empty_path, value_kind
+from ..errors import IsoflowError, NotAPath, check_switch, refuse_empty_path, value_kind, warn
 
 #: marks temporary files and directories (``.NAME.isoflow-tmp-HOST-PID-RANDOM.SUFFIX``)
 TEMP_MARK = ".isoflow-tmp-"
+#: marks a previous output moved aside to make room for its replacement
+#: (``.NAME.isoflow-old-HOST-PID-RANDOM.SUFFIX``, :func:`aside_name`): whole,
+#: and where its name is empty the only copy of it (:func:`remove_abandoned`)
+ASIDE_MARK = ".isoflow-old-"
 #: suffixes of formats that are not written, each with the written one that
 #: holds the same thing, named where the output's suffix is refused
 NEAR_SUFFIXES = {".gltf": (".glb", "binary glTF, the same scene in one file")}
@@ -54,6 +58,7 @@ def check_output_path(
     check_switch(force, "force", str(path))
     refuse_directory_spelling(path, what)  # before Path(), which drops the slash
     path = Path(path)
+    remove_abandoned(path)  # an output a killed command left aside is put back: then it exists, as it did
     refuse_unusable_output(path)
     # a directory before its suffix: "out: surface must end in .ply or ..." named no directory
     if path.is_dir():  # --force must not mean "replace a directory"
@@ -281,20 +286,21 @@ def _read_only_fs(directory: Path) -> bool:
 NAME_MAX = 255
 
 
-def _temp_parts(path: Path) -> tuple[str, str]:
-    """(prefix, suffix) of the temporary names beside ``path``: all its
-    suffixes are kept (nibabel reads ".nii.gz", not only ".gz"), the
-    name shortened so that a temporary name fits where ``path`` does."""
+def _temp_parts(path: Path, mark: str = TEMP_MARK) -> tuple[str, str]:
+    """(prefix, suffix) of the temporary names (or with ``mark`` the
+    asides) beside ``path``: all its suffixes are kept (nibabel reads
+    ".nii.gz", not only ".gz"), the name shortened so that a temporary
+    name fits where ``path`` does."""
     suffix = "".join(path.suffixes)
     # the mark, the host, a 7-digit pid and the random part: a 240-byte output name got a temporary
     # name the file system refused ("File name too long")
-    added = len(os.fsencode(f".{TEMP_MARK}{'0' * 8}-{'0' * 7}-{'0' * 8}"))
+    added = len(os.fsencode(f".{mark}{'0' * 8}-{'0' * 7}-{'0' * 8}"))
     if added + len(os.fsencode(suffix)) > NAME_MAX:  # many dots: the format is named by the last suffix
         suffix = path.suffix
     stem = path.name[: len(path.name) - len(suffix)] if suffix else path.name
     while stem and added + len(os.fsencode(stem + suffix)) > NAME_MAX:
         stem = stem[:-1]
-    return f".{stem}{TEMP_MARK}", suffix
+    return f".{stem}{mark}", suffix
 
 
 def _owner() -> str:
@@ -314,10 +320,14 @@ def temp_sibling(path: Path, directory: bool = False) -> Path:
     with the usual permissions (0666 less the umask), or the directory made,
     so that no other writer can take it. What killed writers left beside
     ``path`` is removed first (:func:`remove_abandoned`)."""
+    remove_abandoned(path)
+    return _reserve(path, directory, TEMP_MARK)
+
+
+def _reserve(path: Path, directory: bool, mark: str) -> Path:
     import secrets  # (imported here: its hmac loads OpenSSL, which a command that writes nothing need not)
 
-    remove_abandoned(path)
-    prefix, suffix = _temp_parts(path)
+    prefix, suffix = _temp_parts(path, mark)
     for _ in range(100):
         tmp = path.with_name(f"{prefix}{_owner()}-{secrets.token_hex(4)}{suffix}")
         if MADE is not None:  # recorded before it exists: see MADE
@@ -336,13 +346,16 @@ def temp_sibling(path: Path, directory: bool = False) -> Path:
 
 
 def aside_name(path: Path) -> Path:
-    """A free hidden name beside ``path`` (:func:`temp_sibling`'s form)
-    that an entry of ``path``'s name (a file, a link, a directory) is
-    renamed to, in the same directory and so at once, to make room for the
-    new one: where the new one's rename fails, the old one is renamed back
-    and is as it was. The name is not among the temporaries that the
-    command's end removes (:data:`MADE`): until it is removed on purpose it
-    holds the old output.
+    """A free hidden name beside ``path``,
+    ``.NAME.isoflow-old-HOST-PID-RANDOM.SUFFIX``, that an entry of
+    ``path``'s name (a file, a link, a directory) is renamed to, in the
+    same directory and so at once, to make room for the new one: where the
+    new one's rename fails, the old one is renamed back and is as it was.
+    The name is not among the temporaries that the command's end removes
+    (:data:`MADE`), and its mark is not theirs: until it is removed on
+    purpose it holds the old output, and where a command killed between
+    the two renames left ``path`` missing, the next write beside it puts
+    the old output back (:func:`remove_abandoned`).
 
     Parameters
     ----------
@@ -360,12 +373,13 @@ def aside_name(path: Path) -> Path:
     >>> store = Path(tempfile.mkdtemp()) / "step_001.zarr"
     >>> (store / "c").mkdir(parents=True)
     >>> old = aside_name(store)
-    >>> old.parent == store.parent, old.name.startswith(".step_001"), old.exists()
+    >>> old.parent == store.parent, old.name.startswith(".step_001.isoflow-old-"), old.exists()
     (True, True, False)
     >>> os.replace(store, old); sorted(p.name for p in old.iterdir()), store.exists()
     (['c'], False)
     """
-    old = temp_sibling(path, directory=True)
+    remove_abandoned(path)
+    old = _reserve(path, True, ASIDE_MARK)
     old.rmdir()  # free for the rename of a file or a link as of a directory
     if MADE is not None:
         MADE.discard(old)
@@ -373,46 +387,203 @@ def aside_name(path: Path) -> Path:
 
 
 def remove_abandoned(path: str | os.PathLike) -> list[Path]:
-    """Remove the temporary files and directories beside ``path`` that a
-    writer killed outright left (SIGKILL, a crash, a power cut: no
-    clean-up ran; SIGTERM and Ctrl-C clean up), so that a killed 10 GB zarr
-    write does not stay on the disk, hidden. A temporary is abandoned when
-    its name says it belongs to a process of this host that no longer
-    runs; another host's (a shared file system) or one of another form is
-    left alone. Returns the removed ones."""
+    """Settle what writers killed outright (SIGKILL, a crash, a power cut:
+    no clean-up ran; SIGTERM and Ctrl-C clean up) left beside ``path``.
+
+    An entry is abandoned when its name says it belongs to a process of
+    this host that no longer runs; another host's (a shared file system),
+    a running process's or one of another form is left alone.
+
+    * A temporary (``.NAME.isoflow-tmp-...``), written in part or whole but
+      never put in place, is removed, so that a killed 10 GB zarr write
+      does not stay on the disk, hidden.
+    * An aside (``.NAME.isoflow-old-...``, :func:`aside_name`) is the
+      previous output, moved away to make room for a new one. Where
+      ``path`` exists the new one was put in place and only the aside's
+      removal was cut short: it is removed. Where ``path`` is missing the
+      process was killed between the two renames and the aside is the only
+      copy: it is renamed back to ``path``, as it was, with a warning line
+      naming both. Of several for one missing path (two commands that
+      replaced it at once, both killed) the newest by its modification
+      time is put back: the others are earlier outputs, replaced on
+      request since, and are removed.
+      A name too long for an aside's to hold it whole (over about 215
+      bytes) could be another output's shortened the same way: its asides
+      are left alone.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output whose temporaries and asides are looked for.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The entries removed (an aside put back is not among them).
+
+    Examples
+    --------
+    >>> import subprocess, sys, tempfile, warnings
+    >>> d = Path(tempfile.mkdtemp())
+    >>> ended = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    >>> prefix, _ = _temp_parts(d / "store.zarr", ASIDE_MARK)
+    >>> aside = d / f"{prefix}{_owner().split('-')[0]}-{int(ended.stdout)}-0123abcd.zarr"
+    >>> (aside / "c").mkdir(parents=True)
+    >>> with warnings.catch_warnings(record=True):
+    ...     remove_abandoned(d / "store.zarr")
+    []
+    >>> sorted(p.name for p in d.iterdir()), (d / "store.zarr" / "c").is_dir()
+    (['store.zarr'], True)
+    """
     path = Path(path)
-    prefix, suffix = _temp_parts(path)
-    host = _owner().split("-")[0]
-    removed = []
     try:
         names = _names(path.parent)
     except OSError:
-        return removed
-    found = [path.parent / n for n in names
-             if n.startswith(prefix) and n.endswith(suffix) and len(n) > len(prefix) + len(suffix)]
-    for tmp in found:
-        owner = tmp.name[len(prefix): len(tmp.name) - len(suffix)].split("-")
-        if len(owner) != 3 or owner[0] != host or not owner[1].isdigit():
-            continue
-        pid = int(owner[1])
-        # (kill(0) would ask about the process group)
-        if pid <= 0 or _running(pid):
-            continue
+        return []
+    removed = []
+    asides = _abandoned(path, ASIDE_MARK, names)
+    if asides and os.path.lexists(path):
+        for old in asides:
+            _remove(old)
+        removed += asides
+    elif asides:
+        removed += _put_back(path, asides)
+    for tmp in _abandoned(path, TEMP_MARK, names):
         _remove(tmp)
         removed.append(tmp)
     return removed
 
 
+def abandoned_asides(directory: str | os.PathLike) -> list[Path]:
+    """The outputs in ``directory`` whose previous entries killed commands
+    left aside (:func:`aside_name`), for a caller that replaces many of a
+    directory's outputs and cannot name each in advance (a flow's steps
+    of an earlier, longer run): :func:`remove_abandoned` of each puts its
+    previous entry back or removes it. Each is its aside's name without
+    the mark; a name shortened to fit its aside's (over about 215 bytes)
+    comes shortened, so match them against the names the caller writes.
+
+    Parameters
+    ----------
+    directory : str or os.PathLike
+        The directory looked in (none, or unreadable: nothing is found).
+
+    Returns
+    -------
+    list of pathlib.Path
+        Sorted, each once however many asides stand for it.
+
+    Examples
+    --------
+    >>> import subprocess, sys, tempfile
+    >>> d = Path(tempfile.mkdtemp())
+    >>> ended = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    >>> host = _owner().split("-")[0]
+    >>> _ = (d / f".step_003{ASIDE_MARK}{host}-{int(ended.stdout)}-0123abcd.ply").write_text("old")
+    >>> _ = (d / f".step_004{ASIDE_MARK}{host}-{os.getpid()}-0123abcd.ply").write_text("running")
+    >>> [p.name for p in abandoned_asides(d)]
+    ['step_003.ply']
+    """
+    directory = Path(directory)
+    try:
+        names = os.listdir(directory)
+    except OSError:
+        return []
+    host = _owner().split("-")[0]
+    found = set()
+    for name in names:
+        stem, mark, rest = name[1:].partition(ASIDE_MARK)
+        parts = re.fullmatch(r"([0-9a-f]{8}-\d+-[0-9a-f]{8})(.*)", rest, re.DOTALL)
+        if name.startswith(".") and mark and parts and _dead_owner(parts[1], host) is not None:
+            found.add(directory / (stem + parts[2]))
+    return sorted(found)
+
+
+def _abandoned(path: Path, mark: str, names: list[str]) -> list[Path]:
+    """The entries of ``names`` (in ``path``'s directory) that are
+    temporaries (asides, by ``mark``) of ``path`` left by a process of this
+    host that no longer runs."""
+    prefix, suffix = _temp_parts(path, mark)
+    if mark == ASIDE_MARK and prefix[1: -len(mark)] + suffix != path.name:  # shortened: it may be another's
+        return []
+    host = _owner().split("-")[0]
+    found = []
+    for name in names:
+        if not (name.startswith(prefix) and name.endswith(suffix) and len(name) > len(prefix) + len(suffix)):
+            continue
+        pid = _dead_owner(name[len(prefix): len(name) - len(suffix)], host)
+        if pid is not None:
+            found.append(path.parent / name)
+    return found
+
+
+def _dead_owner(owner: str, host: str) -> int | None:
+    """The pid of ``HOST-PID-RANDOM`` where it is ``host``'s and no longer
+    runs, else None. The random part is 8 hex digits: ``.a.isoflow-tmp-...``
+    of ``a.b.zarr`` ends in ``RANDOM.b.zarr``, and is not ``a.zarr``'s."""
+    parts = owner.split("-")
+    if len(parts) != 3 or parts[0] != host or not parts[1].isdigit():
+        return None
+    if re.fullmatch(r"[0-9a-f]{8}", parts[2]) is None:
+        return None
+    pid = int(parts[1])
+    # (kill(0) would ask about the process group)
+    return None if pid <= 0 or _running(pid) else pid
+
+
+def _put_back(path: Path, asides: list[Path]) -> list[Path]:
+    """Rename the newest of ``asides`` back to the missing ``path`` and
+    remove the others (see :func:`remove_abandoned`); returns those
+    removed. Where the rename fails (another writer's ``path`` came
+    meanwhile, a read-only directory) every aside is left for the next."""
+    def mtime(p: Path) -> int:
+        try:
+            return os.lstat(p).st_mtime_ns
+        except OSError:
+            return -1
+
+    newest = max(asides, key=mtime)
+    try:
+        if newest.is_dir() and not newest.is_symlink():
+            os.rename(newest, path)  # refused where a file or a non-empty directory took path meanwhile
+        else:
+            _link_back(newest, path)
+    except OSError:
+        return []
+    warn(f"{path}: put back the previous {path.name} from {newest.name}, where a command killed while replacing "
+         "it had left it")
+    rest = [old for old in asides if old != newest]
+    for old in rest:
+        _remove(old)
+    return rest
+
+
+def _link_back(aside: Path, path: Path) -> None:
+    """Give a file or a link at ``aside`` the name ``path`` unless an entry
+    took it: a hard link refuses an existing name, where a rename would
+    replace it (a file system without hard links: renamed where ``path``
+    is still missing)."""
+    try:
+        os.link(aside, path, follow_symlinks=False)
+    except OSError:
+        if os.path.lexists(path):
+            raise
+        os.rename(aside, path)
+        return
+    os.unlink(aside)
+
+
 def _names(directory: Path) -> list[str]:
-    """The temporary names in ``directory``, listed once for the output set
-    being written (:func:`output_set`), at every call outside one: a set of
-    10,000 label files listed their directory for each, 10,000 times 10,000
-    names. A writer killed while the set is written is swept by the next."""
+    """The names of temporaries and asides in ``directory``, listed once
+    for the output set being written (:func:`output_set`), at every call
+    outside one: a set of 10,000 label files listed their directory for
+    each, 10,000 times 10,000 names. A writer killed while the set is
+    written is swept by the next."""
     if not _LISTINGS:
-        return [n for n in os.listdir(directory) if TEMP_MARK in n]
+        return [n for n in os.listdir(directory) if TEMP_MARK in n or ASIDE_MARK in n]
     listed = _LISTINGS[-1]
     if directory not in listed:
-        listed[directory] = [n for n in os.listdir(directory) if TEMP_MARK in n]
+        listed[directory] = [n for n in os.listdir(directory) if TEMP_MARK in n or ASIDE_MARK in n]
     return listed[directory]
 
 

@@ -42,7 +42,7 @@ from .formats.omezarr import multiscales
 from .grid import GridTooLarge, check_grid_request, finest_fit, fmt_count, grid_words
 from .load import load_mesh, mesh_arrays
 from .mesh_units import declared_unit
-from .outputs import atomic_path, check_writable_dir, refuse_nameless
+from .outputs import atomic_path, check_writable_dir, refuse_nameless, remove_abandoned
 from .store_plan import WORKERS, check_chunks, in_store, slab_chunks, slab_layout, store_need
 
 
@@ -55,6 +55,7 @@ def check_store_path(path, force: bool) -> Path:
     path = Path(path)
     if path.suffix.lower() != ".zarr":
         raise IsoflowError(f"{path}: a zarr store must end in .zarr")
+    remove_abandoned(path)  # a store a killed command left aside is put back: then it exists, as it did
     if path.exists():
         if not force:
             raise IsoflowError.worded(f"{path}: exists; pass force=True to overwrite",

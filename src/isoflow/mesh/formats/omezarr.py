@@ -831,9 +831,10 @@ def check_output(path, force: bool = False, dataset: str | None = None) -> Path:
     """An output zarr store (a directory), checked before any work: refused
     when it exists, unless ``force`` and it is a zarr store (which
     :func:`write` replaces)."""
-    from ..outputs import check_writable_dir, refuse_unusable_output
+    from ..outputs import check_writable_dir, refuse_unusable_output, remove_abandoned
 
     path = Path(path)
+    remove_abandoned(path)  # a store a killed command left aside is put back: then it exists, as it did
     refuse_unusable_output(path)  # --force would unlink a device or pipe and put a store in its place
     if not path.parent.exists():  # a file in its place is named as one by check_writable_dir
         raise IsoflowError(f"{path.parent}: no such directory (for the output {path.name})")
