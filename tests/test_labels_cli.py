@@ -512,20 +512,24 @@ def test_surface_labels_without_the_check_writes_the_same_file(tmp_path, capsys,
                                                 ("each/", ("--suffix", ".ply", "--no-check"), 2)])
 def test_surface_labels_reports_one_growing_count(tmp_path, capsys, monkeypatch, segmentation, out, extra, phases):
     """Long work shows progress: every label meshed, then every label read
-    back (or written, a file each), as one count that only grows."""
+    back (or written, a file each), as one count that only grows (after
+    the label table's own bar, which reaches its end)."""
     import contextlib
 
     from isoflow.cli import progress
 
-    seen = []
+    bars: dict[str, list] = {}
 
     @contextlib.contextmanager
     def bar(args, label, unit="it", estimate=False):
-        yield lambda done, total: seen.append((done, total))
+        yield lambda done, total: bars.setdefault(label, []).append((done, total))
 
     monkeypatch.setattr(progress, "progress_bar", bar)
     np.save(tmp_path / "seg.npy", segmentation)
     run(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{tmp_path}/{out}", *extra)
+    assert list(bars) == ["label table", "label surfaces"]
+    assert bars["label table"][-1][0] == bars["label table"][-1][1]
+    seen = bars["label surfaces"]
     done = [d for d, _ in seen]
     assert done == sorted(done) and seen[-1] == (6 * phases, 6 * phases)
     assert {t for _, t in seen} == {6 * phases}

@@ -88,3 +88,36 @@ def test_info_labels_shows_the_tables_bar_on_a_terminal(tmp_path, monkeypatch):
     assert "label table:" in shown and "%|" in shown
     quiet = stderr_of(monkeypatch, Terminal(), ["info", tmp_path / "noise.npy", "--labels", "--quiet"])
     assert "label table" not in quiet
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_steps_of_one_layer_and_a_table_that_fills_within_them_give_each_labels_own_report(monkeypatch, threads):
+    """The passes are cut into steps (a count and a look at the stop each):
+    cut at every layer, and the vertex pass' pair table draining within a
+    step, the table is still every label's own ``analyze``."""
+    from isoflow.scale import pieces, ticks
+
+    image = noise(18, 9, seed=11)
+    image[4:12, 4:12, 4:12] = 3  # a large label enclosing others' pieces
+    image[6:10, 6:10, 6:10] = 0
+    image[7, 7, 7] = 5
+    monkeypatch.setattr(ticks, "STEP_VOXELS", 1)
+    monkeypatch.setattr(pieces, "FIRST_SLOTS", 64)
+    for conn in (6, 26):
+        table, said = said_while(image, connectivity=conn, method="compiled", threads=threads)
+        # on one thread, said at every count that moves the bar: each layer of the vertex pass (on two, the
+        # waiting thread says the sum every tenth of a second)
+        assert threads == 2 or len(said) > image.shape[0]
+        for row, label in enumerate(table["label"].tolist()):
+            report = isoflow.analyze(image == label, conn)
+            assert table["euler_characteristic"][row] == report["euler_characteristic"], (conn, label)
+            assert [table[f"b{d}"][row] for d in range(3)] == list(report["betti"]), (conn, label)
+            assert table["genera"][row] == tuple(s["genus"] for s in report["surfaces"]), (conn, label)
+
+
+def test_a_2d_table_says_its_end():
+    cells = noise(30, 20)[0]
+    table, said = said_while(cells)
+    assert said and said[-1][0] == said[-1][1] and len({t for _, t in said}) == 1
+    assert table["euler_characteristic"].tolist() == [isoflow.analyze(cells == v, 4)["euler_characteristic"]
+                                                      for v in table["label"].tolist()]

@@ -78,11 +78,13 @@ def test_an_error_is_raised_once_every_call_is_done():
 
 @pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="an interval timer's signal")
 def test_an_interrupted_wait_stops_the_calls_and_returns_once_they_have():
-    """Ctrl-C lands in the waiting thread: the calls are asked to stop
-    (cancel.STOP, which the label table's passes look at) and the
-    interrupt goes on only once they have returned, with STOP as it was;
-    calls let run on would hold the process at its exit."""
+    """Ctrl-C lands in the waiting thread of calls that count their work
+    (and look at cancel.STOP there, as the label table's passes do): they
+    are asked to stop, and the interrupt goes on only once they have
+    returned, with STOP as it was; calls let run on would hold the
+    process at its exit."""
     from isoflow.scale import cancel
+    from isoflow.scale.ticks import Ticks
 
     ended: list[float] = []
 
@@ -100,7 +102,7 @@ def test_an_interrupted_wait_stops_the_calls_and_returns_once_they_have():
         signal.setitimer(signal.ITIMER_REAL, 0.3)
         start = time.monotonic()
         with pytest.raises(KeyboardInterrupt):
-            compiled.run([(until_stopped,)] * 2)
+            compiled.run([(until_stopped,)] * 2, Ticks(None, {}))
         raised = time.monotonic()
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)

@@ -319,8 +319,8 @@ def label_table(
         ``progress(done, total)``, called on the calling thread as the
         work goes (``done`` rising to ``total``, which stays the same; its
         units are shares of the work, not voxels or labels), as the
-        ``info --labels`` bar shows it. A 3D image only: a 2D table is
-        made in one NumPy pass.
+        ``info --labels`` bar shows it. A 2D table, made in one NumPy
+        pass, says its end only.
 
     Returns
     -------
@@ -379,6 +379,13 @@ def label_table(
     >>> label_table(image, background=True)["label"].tolist()  # every label, the background among them
     [0, 3, 7]
 
+    Its progress, as a bar would show it (a share of a total)
+
+    >>> said = []
+    >>> _ = label_table(image, progress=lambda done, total: said.append((done, total)))
+    >>> said[-1][0] == said[-1][1]  # the end reached
+    True
+
     A 2D segmentation: a ring of four cells around a fifth
 
     >>> cells = np.zeros((5, 5), np.int32)
@@ -409,11 +416,13 @@ def label_table(
     wanted = None if labels is None else wanted_labels(labels, vol.dtype, "label_table: labels")
     background = checked_background(background, labels, "label_table")
     if vol.ndim == 2:
+        from ..scale.ticks import Ticks
         from .planar_labels import planar_table
 
         _use_compiled(vol, "numpy" if check_method(method) == "auto" else method)  # the method checked as in 3D
-        return with_names(unheld_columns(planar_table(vol, conn, place.spacing, place.origin, wanted, background),
-                                         place.origin, place.spacing, vol.shape), names)
+        table = planar_table(vol, conn, place.spacing, place.origin, wanted, background)
+        Ticks(progress, STAGES).finish()  # one pass, said at its end
+        return with_names(unheld_columns(table, place.origin, place.spacing, vol.shape), names)
     with using(threads):
         found = table_rows(vol, conn, wanted, surfaces, background, method, progress)
     return with_names(unheld_columns(columns(found, place.spacing, place.origin, surfaces), place.origin,
@@ -1006,8 +1015,8 @@ def rows_of_pieces(pieces: dict, passed: dict, dtype, conn: int, wanted: np.ndar
 
     values, piece_label, rows = label_rows(pieces["values"], dtype, wanted)
     # every label's pieces, for its sums and for the graph (each label has one piece at least)
-    by = grouped(piece_label[1:], len(values), np.arange(1, len(piece_label), dtype=np.int64))
-    topology = graph_topology(pieces, piece_label, rows, passed, conn, *by, ticks=ticks)
+    lab_start, lab_pieces = grouped(piece_label[1:], len(values), np.arange(1, len(piece_label), dtype=np.int64))
+    topology = graph_topology(pieces, piece_label, rows, passed, conn, lab_start, lab_pieces, ticks)
     by_label = label_sums(pieces, piece_label, passed, len(values))
     found = {key: at_rows(column, rows) for key, column in by_label.items()}
     found.update(topology)

@@ -444,10 +444,12 @@ def run(calls: list, ticks: Ticks | None = None) -> list:
     several; results in order, once every call is done. The calls are
     compiled passes that release the GIL; one call runs on the calling
     thread, several on threads the calling thread keeps for its next
-    calls, while it waits: it says their progress (``ticks``) and, where
-    the wait is interrupted (Ctrl-C), asks them to stop
-    (:data:`~isoflow.scale.cancel.STOP`, which the label table's passes
-    look at as they count their work) and returns once they have.
+    calls, while it waits. With ``ticks``, calls that count their work
+    there and look at :data:`~isoflow.scale.cancel.STOP` at each count
+    (the label table's passes), it says their progress and, where the
+    wait is interrupted (Ctrl-C), asks them to stop and returns once they
+    have (within a step of their work); other calls are left to end as
+    they do, the interrupt raised at once.
 
     Parameters
     ----------
@@ -455,7 +457,7 @@ def run(calls: list, ticks: Ticks | None = None) -> list:
         ``(fn, *args)`` for each call.
     ticks : Ticks, optional
         The calls' progress (:class:`~isoflow.scale.ticks.Ticks`), said
-        every tenth of a second while they run.
+        every tenth of a second while they run; the calls stop when asked.
 
     Returns
     -------
@@ -475,13 +477,13 @@ def run(calls: list, ticks: Ticks | None = None) -> list:
     from .cancel import POLL, STOP
 
     pool = _pool(len(calls))
-    futures = []
+    futures = [pool.submit(fn, *args) for fn, *args in calls]
+    if ticks is None:
+        wait(futures)  # no call left running when one fails, as a pool of its own would wait
+        return [f.result() for f in futures]
     try:
-        futures.extend(pool.submit(fn, *args) for fn, *args in calls)
-        # no call left running when one fails, as a pool of its own would wait
         while wait(futures, timeout=POLL)[1]:
-            if ticks is not None:
-                ticks.say()
+            ticks.say()
     except BaseException:
         ours = not STOP[0]  # a signal handler may have set it already, for other work too
         STOP[0] = 1
