@@ -121,3 +121,18 @@ def test_a_2d_table_says_its_end():
     assert said and said[-1][0] == said[-1][1] and len({t for _, t in said}) == 1
     assert table["euler_characteristic"].tolist() == [isoflow.analyze(cells == v, 4)["euler_characteristic"]
                                                       for v in table["label"].tolist()]
+
+
+def test_an_image_made_in_slabs_says_one_rising_total(monkeypatch):
+    """An image of more voxels than the pieces are numbered in is made in
+    slabs, each said by the slabs' own count: still one bar, one total."""
+    from isoflow.scale import pieces
+
+    monkeypatch.setattr(pieces, "MAX_PIECE_VOXELS", 600)  # slabs of a few layers
+    image = noise(12, 7)
+    table, said = said_while(image, method="compiled")
+    done = [d for d, _ in said]
+    assert len({t for _, t in said}) == 1 and done == sorted(done) and said[-1][0] == said[-1][1]
+    assert len(said) > 3
+    assert table["euler_characteristic"].tolist() == [isoflow.analyze(image == v, 6)["euler_characteristic"]
+                                                      for v in table["label"].tolist()]

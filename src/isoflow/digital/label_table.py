@@ -859,7 +859,8 @@ def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
                f"label image", hint="store it as .zarr and run isoflow info --labels on that (block by block)")
     if vol.size > MAX_PIECE_VOXELS:
         return slab_rows(np.ascontiguousarray(vol), conn, wanted, surfaces, [vol.shape[0]],
-                         progress=None if ticks is None else ticks.progress, background=background)
+                         progress=None if ticks is None or ticks.progress is None else ticks.follow,
+                         background=background)
     pieces = piece_runs(vol, later=later_bytes, ticks=ticks)
     if rather and pieces["n"] >= FRAGMENTED * vol.size and len(distinct(pieces["values"][1:])[0]) <= FEW_VALUES:
         return None

@@ -68,6 +68,14 @@ class Ticks:
     >>> ticks.say(); ticks.finish()
     >>> said
     [(0, 100), (10, 100), (20, 100), (60, 100), (100, 100)]
+
+    Work that counts itself, followed as the rest of a bar
+
+    >>> said.clear(); ticks = Ticks(lambda done, total: said.append(done), {"read": 20, "sum": 80})
+    >>> ticks.stage("read", 1); ticks.add(0, 1)
+    >>> for done in range(5): ticks.follow(done, 4)
+    >>> said
+    [0, 20, 40, 60, 80, 100]
     """
 
     def __init__(self, progress: Callable[[int, int], object] | None, shares: Mapping[str, int]) -> None:
@@ -91,6 +99,15 @@ class Ticks:
         self.base += self.share
         self.share, self.size = self.total - self.base, max(int(size), 1)
         self.slots[:] = 0
+        self.say()
+
+    def follow(self, done: int, total: int) -> None:
+        """Say ``done`` of ``total`` units of work that counts itself (a
+        pass with a ``progress(done, total)`` of its own) as the rest of
+        the bar: a callback for such a pass."""
+        if self.share != self.total - self.base or self.size != max(int(total), 1):
+            self.rest(total)
+        self.slots[0] = done
         self.say()
 
     def slot(self, call: int) -> np.ndarray:
