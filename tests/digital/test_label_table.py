@@ -644,6 +644,36 @@ def test_auto_takes_the_label_by_label_pass_where_the_pieces_are_many_and_the_la
     assert not called
 
 
+@needs_numba
+def test_the_label_by_label_pass_after_the_pieces_loads_the_compiled_census_once_the_boxes_add_up(monkeypatch):
+    """Taken after the pieces were counted (numba in the process), the
+    label-by-label pass weighs its boxes as a loop's volumes: NumPy's
+    census while they add up to less than the size that pays for loading
+    the compiled one, the compiled census from there (noise of ten labels
+    at 128^3 made every box of the whole image by NumPy's census, three
+    times as slow). Taken for the whole image (few labels, small), every
+    box stays NumPy's."""
+    from isoflow.digital import analysis, closed_surfaces
+    from isoflow.scale import compiled
+
+    monkeypatch.setattr(compiled, "MIN_VOXELS", 200_000)  # the census from 400,000 voxels: two boxes of 66^3
+    monkeypatch.setattr(closed_surfaces, "census_loaded", lambda: False)  # as in a fresh process
+    methods = []
+    analyze = analysis.analyze
+    monkeypatch.setattr(analysis, "analyze", lambda *a, **k: methods.append(k["method"]) or analyze(*a, **k))
+    image = np.random.default_rng(4).integers(0, 4, (64, 64, 64)).astype(np.uint8)  # 3 labels and 0: fragmented
+    table = label_table(image, 26)
+    assert methods == ["numpy", "compiled", "compiled"]
+    for row, label in enumerate(table["label"].tolist()):
+        report = analyze(image == label, 26)
+        assert table["euler_characteristic"][row] == report["euler_characteristic"]
+        assert [table[f"b{d}"][row] for d in range(3)] == list(report["betti"])
+    methods.clear()
+    compiled.reset_tally()
+    label_table(image[:6, :6, :6], 26)  # NumPy's pass for the whole image: numba need not load
+    assert methods and set(methods) == {"numpy"}
+
+
 @pytest.mark.parametrize("label", [1.5, True, np.True_, np.float64(1.5), np.float32(1.5)])
 def test_a_label_asked_for_as_a_float_or_a_bool_is_refused(label):
     """``labels=[True]`` was taken as label 1, and ``1.5`` cut to it: a

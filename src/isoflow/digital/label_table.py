@@ -446,6 +446,7 @@ def table_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
     ticks = Ticks(progress, STAGES)
     if not _use_compiled(vol, method):
         return box_rows(vol, conn, wanted, surfaces, background, ticks)
+    # from here numba is loaded (the pieces were counted by it): the boxes' census is weighed as one volume's
     first = None
     try:
         found = piece_rows(vol, conn, wanted, surfaces, background, rather=method == "auto", ticks=ticks)
@@ -457,7 +458,7 @@ def table_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
             raise
         first = refusal
     try:
-        return box_rows(vol, conn, wanted, surfaces, background, ticks)
+        return box_rows(vol, conn, wanted, surfaces, background, ticks, weighed=True)
     except DoesNotFit:
         if first is None:
             raise
@@ -1391,22 +1392,30 @@ def same_pieces(total: int, same: list) -> np.ndarray:
 
 
 def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool,
-             background: bool = False, ticks: Ticks | None = None) -> dict:
+             background: bool = False, ticks: Ticks | None = None, weighed: bool = False) -> dict:
     """The rows by NumPy: ``analyze`` of each label's box plus one voxel
     (outside the box everything is the label's complement, so the report
     is the whole image's), the voxels of every label from one sort;
     ``background``: with ``wanted`` None, label 0's row too; ``ticks``:
-    the progress, the rest of it counted in labels."""
+    the progress, the rest of it counted in labels. Each box's census is
+    NumPy's unless the compiled one is loaded or the box is large enough
+    to pay for loading it (:func:`~isoflow.digital.closed_surfaces.use_census`);
+    with ``weighed`` (numba already in the process: the one pass counted
+    the pieces first), the boxes add up as the volumes of a loop do (the
+    ski-rental rule of ``"auto"``), so that the census is loaded once
+    they reach the size that pays for it: noise of ten labels at 128^3 has
+    ten boxes of the whole image, each three times as slow in NumPy's
+    census as in the compiled one."""
     from ..scale.ticks import silent
 
     with budget_held():  # the memory available read once, for the sort's check and every box's
-        found = _box_rows(vol, conn, wanted, surfaces, background, silent(ticks))
+        found = _box_rows(vol, conn, wanted, surfaces, background, silent(ticks), weighed)
     silent(ticks).finish()
     return found
 
 
 def _box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool, background: bool,
-              ticks: Ticks) -> dict:
+              ticks: Ticks, weighed: bool) -> dict:
     """:func:`box_rows` within its budget."""
     from .analysis import analyze
 
@@ -1436,10 +1445,10 @@ def _box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: b
             continue
         lo, hi, sums = _extent(order[starts[at]:ends[at]], vol.shape)
         box = np.pad(vol[tuple(slice(a, b + 1) for a, b in zip(lo, hi))] == label, 1)
-        # the pass is chosen once for the whole image (_use_compiled): the
-        # boxes do not add to the tally of "auto", which would load numba
-        # part way through this call
-        report = analyze(box, conn, surfaces=surfaces, method="compiled" if use_census(box, surfaces) else "numpy")
+        # where the pass was chosen for the whole image (_use_compiled: NumPy's, numba not loaded), the boxes do
+        # not add to the tally of "auto", which would load numba part way through this call
+        census = use_census(box, surfaces, record=weighed)
+        report = analyze(box, conn, surfaces=surfaces, method="compiled" if census else "numpy")
         found["voxels"][row], found["sums"][row] = ends[at] - starts[at], sums
         found["lo"][row], found["hi"][row] = lo, hi
         found["b0"][row], found["b2"][row] = report["betti"][0], report["betti"][2]
