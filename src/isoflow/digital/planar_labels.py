@@ -199,14 +199,21 @@ def label_features(padded: np.ndarray, k: int, conn: int) -> np.ndarray:
         q = [padded[y0 + (b & 1):y1 + (b & 1), (b >> 1):nx + 1 + (b >> 1)].reshape(-1) for b in range(4)]
         mixed = (q[0] != q[1]) | (q[0] != q[2]) | (q[0] != q[3])  # (a block of one label adds nothing)
         q = [c[mixed] for c in q]
+        # each pair of the block's pixels compared once, the masks built a byte a vertex
+        same = {(r, p): (q[r] == q[p]).view(np.uint8) for p in range(4) for r in range(p)}
         labels, masks = [], []
         for p in range(4):
             first = q[p] != 0
-            for r in range(p):
-                first &= q[r] != q[p]
-            masks.append(sum((q[r] == q[p]).astype(np.int64) << r for r in range(4))[first])
-            labels.append(q[p][first].astype(np.int64))
-        label, mask = np.concatenate(labels), np.concatenate(masks)
+            mask = np.full(len(q[p]), 1 << p, np.uint8)
+            for r in range(4):
+                if r != p:
+                    equal = same[min(r, p), max(r, p)]
+                    mask |= equal << np.uint8(r)
+                    if r < p:
+                        first &= equal == 0
+            masks.append(mask[first])
+            labels.append(q[p][first])
+        label, mask = np.concatenate(labels).astype(np.int64), np.concatenate(masks)
         if counts is not None:  # few labels: a histogram, weighed once at the end
             counts += np.bincount(label * 16 + mask, minlength=16 * k).reshape(k, 16)
         else:
