@@ -2,9 +2,12 @@
 
     python benchmarks/bench_scattered_labels.py                    # 64^3, 96^3 and 128^3, 1,000 labels
     python benchmarks/bench_scattered_labels.py --sizes 48 --repeat 1 --json ''   # a look
+    python benchmarks/bench_scattered_labels.py --ndim 2 --sizes 2048 --labels 10 --repeat 3 \
+        --json benchmarks/results/scattered_labels_2d.json                    # 2D noise of a few labels
 
 Input (generated): ``np.random.default_rng(1).integers(0, labels, (n,)*3,
-dtype=np.uint32)``, every voxel a label drawn at random: each label is
+dtype=np.uint32)`` (``(n,)*2`` with ``--ndim 2``, at 4-connectivity
+there), every voxel a label drawn at random: each label is
 thousands of pieces spread over the whole image, its box the image's, the
 worst case of the label table's walks around a label (the grain maps of
 ``bench_labels.py`` are the usual case).
@@ -53,22 +56,24 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[64, 96, 128])
     ap.add_argument("--labels", type=int, default=1000)
+    ap.add_argument("--ndim", type=int, choices=(2, 3), default=3)
     ap.add_argument("--repeat", type=int, default=2)
     ap.add_argument("--json", default=str(ROOT / "benchmarks" / "results" / "scattered_labels.json"))
     args = ap.parse_args(argv)
     lines = ["| image | labels | isoflow label_table (s) | regionprops_table (s) | isoflow peak growth (B/voxel) |",
              "|---|---|---|---|---|"]
     results = []
+    conn = 6 if args.ndim == 3 else 4  # scikit-image's connectivity=1 either way
     # numba's passes loaded (a small scattered image takes the compiled ones)
-    isoflow.label_table(np.random.default_rng(0).integers(0, 50, (24,) * 3, dtype=np.uint32), 6)
+    isoflow.label_table(np.random.default_rng(0).integers(0, 50, (24,) * args.ndim, dtype=np.uint32), conn)
     for n in args.sizes:
-        image = np.random.default_rng(1).integers(0, args.labels, (n,) * 3, dtype=np.uint32)
+        image = np.random.default_rng(1).integers(0, args.labels, (n,) * args.ndim, dtype=np.uint32)
         before = resident_bytes()
-        table = isoflow.label_table(image, 6)
+        table = isoflow.label_table(image, conn)
         grown = peak_bytes() - before
         first = int(table["label"][0])
         assert table["euler_characteristic"][0] == euler_number(image == first, connectivity=1)
-        tools = {"isoflow": lambda x=image: isoflow.label_table(x, 6),
+        tools = {"isoflow": lambda x=image: isoflow.label_table(x, conn),
                  "skimage": lambda x=image: regionprops_table(x, properties=("label", "area", "euler_number"))}
         best = dict.fromkeys(tools, float("inf"))
         for _ in range(args.repeat):
@@ -76,10 +81,10 @@ def main(argv=None) -> int:
                 start = time.perf_counter()
                 run()
                 best[name] = min(best[name], time.perf_counter() - start)
-        rec = {"size": n, "labels": len(table["label"]), "isoflow_seconds": best["isoflow"],
+        rec = {"size": n, "ndim": args.ndim, "labels": len(table["label"]), "isoflow_seconds": best["isoflow"],
                "skimage_seconds": best["skimage"], "isoflow_peak_growth_bytes_per_voxel": grown / image.size}
         results.append(rec)
-        lines.append(f"| {n}^3 | {rec['labels']:,} | {best['isoflow']:.2f} | {best['skimage']:.2f} | "
+        lines.append(f"| {n}^{args.ndim} | {rec['labels']:,} | {best['isoflow']:.2f} | {best['skimage']:.2f} | "
                      f"{rec['isoflow_peak_growth_bytes_per_voxel']:.0f} |")
         print(lines[-1], file=sys.stderr)
     print("\n".join(lines))
