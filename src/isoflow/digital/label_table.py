@@ -446,7 +446,7 @@ def table_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
     ticks = Ticks(progress, STAGES)
     if not _use_compiled(vol, method):
         return box_rows(vol, conn, wanted, surfaces, background, ticks)
-    # from here numba is loaded (the pieces were counted by it): the boxes' census is weighed as one volume's
+    # from here numba is loaded (it counts the pieces): the label-by-label pass weighs its boxes as a loop's volumes
     first = None
     try:
         found = piece_rows(vol, conn, wanted, surfaces, background, rather=method == "auto", ticks=ticks)
@@ -1403,9 +1403,8 @@ def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bo
     with ``weighed`` (numba already in the process: the one pass counted
     the pieces first), the boxes add up as the volumes of a loop do (the
     ski-rental rule of ``"auto"``), so that the census is loaded once
-    they reach the size that pays for it: noise of ten labels at 128^3 has
-    ten boxes of the whole image, each three times as slow in NumPy's
-    census as in the compiled one."""
+    they reach the size that pays for it (each label of noise has the
+    whole image for its box)."""
     from ..scale.ticks import silent
 
     with budget_held():  # the memory available read once, for the sort's check and every box's
