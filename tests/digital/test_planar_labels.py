@@ -122,6 +122,35 @@ def test_regionprops_gives_the_same_areas_euler_numbers_boxes_and_centroids():
         np.testing.assert_allclose(ours[f"centroid-{d}"], theirs[f"centroid-{d}"] + 0.5, rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("by_lines", [True, False])
+def test_noise_read_by_rows_and_columns_gives_regionprops_areas_boxes_and_centroids(monkeypatch, by_lines):
+    """Noise of a few labels, a run at nearly every pixel: each label's
+    pixels are counted per row and per column, not read from the runs;
+    its areas, boxes and centroids are scikit-image's either way (the runs
+    read where the path is turned off)."""
+    from skimage.measure import regionprops_table
+
+    taken = []
+    by_rows = planar_labels._places_by_lines
+    monkeypatch.setattr(planar_labels, "_places_by_lines", lambda *a: taken.append(1) or by_rows(*a))
+    if not by_lines:
+        monkeypatch.setattr(planar_labels, "RUNS_PER_PIXEL", 1)  # more runs than pixels: never
+    image = np.random.default_rng(8).integers(0, 6, (45, 52)).astype(np.int32)
+    image[:3] = 7  # a label of three full rows, its box the image's width
+    image[20:, 40:] = 0
+    ours = label_table(image, 4)
+    assert bool(taken) == by_lines
+    theirs = regionprops_table(image, properties=("label", "area", "bbox", "centroid"))
+    np.testing.assert_array_equal(ours["label"], theirs["label"])
+    np.testing.assert_array_equal(ours["voxels"], theirs["area"])
+    for d in range(4):
+        np.testing.assert_array_equal(ours[f"bbox-{d}"], theirs[f"bbox-{d}"])
+    for d in range(2):
+        np.testing.assert_allclose(ours[f"centroid-{d}"], theirs[f"centroid-{d}"] + 0.5, rtol=0, atol=1e-12)
+    for row, label in enumerate(ours["label"].tolist()):
+        assert ours["euler_characteristic"][row] == analyze(image == label, 4)["euler_characteristic"]
+
+
 def test_pitch_origin_and_labels_asked_for():
     image = np.zeros((6, 9), np.uint16)
     image[1:4, 2:7] = 4
