@@ -25,8 +25,11 @@ from .cancel import STOP, Stopped
 #: int64 slots between two calls' counters: each on a cache line of its own
 SPACING = 8
 
-#: calls of one stage that count at once (a thread each)
-MOST_CALLS = 64
+#: calls of one stage with a counter of their own (a thread each); more
+#: calls than this share counters (``call % MOST_CALLS``): their counts
+#: then say less than was done, never more, and nothing is written past
+#: the counters
+MOST_CALLS = 256
 
 
 #: voxels of a step of a pass between two counts (and looks at a stop): a
@@ -113,14 +116,15 @@ class Ticks:
     def slot(self, call: int) -> np.ndarray:
         """Call ``call``'s counter of this stage, one int64 (a compiled
         loop writes its count there)."""
-        return self.slots[SPACING * call:SPACING * call + 1]
+        at = SPACING * (call % MOST_CALLS)
+        return self.slots[at:at + 1]
 
     def add(self, call: int, units: int) -> None:
         """Count ``units`` more done by call ``call``, said at once where
         the call runs on the thread that made these ticks (which then has
         no wait in which to say it); :class:`~isoflow.scale.cancel.Stopped`
         where a stop was asked."""
-        self.slots[SPACING * call] += units
+        self.slots[SPACING * (call % MOST_CALLS)] += units
         if threading.get_ident() == self.owner:
             self.say()
         stop_here()
