@@ -1407,9 +1407,10 @@ def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bo
     whole image for its box)."""
     from ..scale.ticks import silent
 
+    ticks = silent(ticks)
     with budget_held():  # the memory available read once, for the sort's check and every box's
-        found = _box_rows(vol, conn, wanted, surfaces, background, silent(ticks), weighed)
-    silent(ticks).finish()
+        found = _box_rows(vol, conn, wanted, surfaces, background, ticks, weighed)
+    ticks.finish()
     return found
 
 
@@ -1437,15 +1438,14 @@ def _box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: b
     surfs: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # per label: its rows, chi and faces
     ticks.rest(len(labels))
     for row, label in enumerate(labels):
-        ticks.slot(0)[0] = row  # the labels done
-        ticks.add(0, 0)
+        ticks.reached(0, row)  # the labels done
         at = np.searchsorted(values, label)
         if at == len(values) or values[at] != label:
             continue
         lo, hi, sums = _extent(order[starts[at]:ends[at]], vol.shape)
         box = np.pad(vol[tuple(slice(a, b + 1) for a, b in zip(lo, hi))] == label, 1)
-        # where the pass was chosen for the whole image (_use_compiled: NumPy's, numba not loaded), the boxes do
-        # not add to the tally of "auto", which would load numba part way through this call
+        # the boxes count in the tally of "auto" only where numba is loaded already (weighed): where NumPy's pass
+        # was chosen for the whole image, counting them would load numba part way through this call
         census = use_census(box, surfaces, record=weighed)
         report = analyze(box, conn, surfaces=surfaces, method="compiled" if census else "numpy")
         found["voxels"][row], found["sums"][row] = ends[at] - starts[at], sums

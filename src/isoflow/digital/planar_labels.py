@@ -272,11 +272,11 @@ def _places_by_lines(dense: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray,
     True
     """
     ny, nx = dense.shape
-    flat = dense.astype(np.int64)
     lines = []
     for axis, n in ((0, ny), (1, nx)):
         at = np.arange(n, dtype=np.int64).reshape((n, 1) if axis == 0 else (1, n)) * k
-        lines.append(np.bincount((flat + at).reshape(-1), minlength=n * k).reshape(n, k))
+        # (uint32 labels plus int64 offsets: the sum is int64, with no copy of the labels first)
+        lines.append(np.bincount((dense + at).reshape(-1), minlength=n * k).reshape(n, k))
     counts = lines[0].sum(axis=0)
     sums = np.stack([lines[0].T @ np.arange(ny), lines[1].T @ np.arange(nx)], axis=1).astype(np.float64)
     lo, hi = np.zeros((k, 2), np.int64), np.full((k, 2), -1, np.int64)

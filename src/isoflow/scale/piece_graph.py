@@ -546,8 +546,7 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
         nsurf = _label_loop(part, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n,
                             adj_q, obj_kind, b0_kind, bg_kind, cc_kind, local, *stamps, queue, heap, hkey, parent,
                             parent0, *grouping, *small, b0, b2, *surf, MOST_WALKS, ticks.slot(call), STOP)
-        ticks.slot(call)[0] = len(part)
-        ticks.add(call, 0)  # (where the loop stopped early, Stopped)
+        ticks.reached(call, len(part))  # (where the loop stopped early, Stopped)
         surf[0][:nsurf] += a  # rows of the whole
         return (b0, b2) + tuple(s[:nsurf] for s in surf)
 

@@ -25,10 +25,10 @@ from .cancel import STOP, Stopped
 #: int64 slots between two calls' counters: each on a cache line of its own
 SPACING = 8
 
-#: calls of one stage with a counter of their own (a thread each); more
-#: calls than this share counters (``call % MOST_CALLS``): their counts
-#: then say less than was done, never more, and nothing is written past
-#: the counters
+#: calls of one stage with a counter of their own (a thread each); calls
+#: beyond share them (``call % MOST_CALLS``), since a compiled loop writes
+#: its count with no bounds check; a shared counter says less than was
+#: done, never more
 MOST_CALLS = 256
 
 
@@ -67,8 +67,8 @@ class Ticks:
     >>> ticks.stage("read", 4)
     >>> ticks.add(0, 2); ticks.add(1, 2)
     >>> ticks.stage("sum", 10)
-    >>> ticks.slot(0)[0] = 5  # as a compiled loop writes it
-    >>> ticks.say(); ticks.finish()
+    >>> ticks.reached(0, 5)  # a count set, as a compiled loop sets it
+    >>> ticks.finish()
     >>> said
     [(0, 100), (10, 100), (20, 100), (60, 100), (100, 100)]
 
@@ -125,9 +125,21 @@ class Ticks:
         no wait in which to say it); :class:`~isoflow.scale.cancel.Stopped`
         where a stop was asked."""
         self.slots[SPACING * (call % MOST_CALLS)] += units
+        self._said_here()
+
+    def reached(self, call: int, done: int) -> None:
+        """Call ``call`` has done ``done`` units of this stage in all (a
+        count set, as a compiled loop sets it, not added), said as
+        :meth:`add` says it; :class:`~isoflow.scale.cancel.Stopped` where
+        a stop was asked."""
+        self.slot(call)[0] = done
+        self._said_here()
+
+    def _said_here(self) -> None:
         if threading.get_ident() == self.owner:
             self.say()
-        stop_here()
+        if STOP[0]:
+            raise Stopped
 
     def say(self) -> None:
         """Tell ``progress`` the work done, where more than it was told."""
@@ -144,14 +156,16 @@ class Ticks:
         self.say()
 
 
-def stop_here() -> None:
-    """:class:`~isoflow.scale.cancel.Stopped` where a stop was asked
-    (:func:`~isoflow.scale.cancel.request_stop`: a signal)."""
-    if STOP[0]:
-        raise Stopped
-
-
 def silent(ticks: Ticks | None) -> Ticks:
     """``ticks``, or where None, ticks that tell no one (the stops are
-    looked at all the same)."""
+    looked at all the same).
+
+    Examples
+    --------
+    >>> quiet = silent(None)
+    >>> quiet.stage("any", 2); quiet.add(0, 1); quiet.progress is None
+    True
+    >>> silent(quiet) is quiet
+    True
+    """
     return Ticks(None, {}) if ticks is None else ticks
