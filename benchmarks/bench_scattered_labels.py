@@ -4,13 +4,17 @@
     python benchmarks/bench_scattered_labels.py --sizes 48 --repeat 1 --json ''   # a look
     python benchmarks/bench_scattered_labels.py --ndim 2 --sizes 2048 --labels 10 --repeat 3 \
         --json benchmarks/results/scattered_labels_2d.json                    # 2D noise of a few labels
+    python benchmarks/bench_scattered_labels.py --sizes 128 --labels 3 4 10 30 --repeat 3 \
+        --json benchmarks/results/scattered_labels_few.json                   # noise of a few labels
 
 Input (generated): ``np.random.default_rng(1).integers(0, labels, (n,)*3,
 dtype=np.uint32)`` (``(n,)*2`` with ``--ndim 2``, at 4-connectivity
 there), every voxel a label drawn at random: each label is
 thousands of pieces spread over the whole image, its box the image's, the
 worst case of the label table's walks around a label (the grain maps of
-``bench_labels.py`` are the usual case).
+``bench_labels.py`` are the usual case); with a few labels, a noisy
+segmentation (``--labels 3``: three phases of a third of the voxels each,
+which percolate).
 
 In process, the tools alternated, best of ``--repeat`` after one untimed
 call each: ``isoflow.label_table(image, 6)`` (every label's row, Betti
@@ -55,7 +59,7 @@ def main(argv=None) -> int:
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[64, 96, 128])
-    ap.add_argument("--labels", type=int, default=1000)
+    ap.add_argument("--labels", type=int, nargs="+", default=[1000], help="values drawn (0 among them), each in turn")
     ap.add_argument("--ndim", type=int, choices=(2, 3), default=3)
     ap.add_argument("--repeat", type=int, default=2)
     ap.add_argument("--json", default=str(ROOT / "benchmarks" / "results" / "scattered_labels.json"))
@@ -66,8 +70,8 @@ def main(argv=None) -> int:
     conn = 6 if args.ndim == 3 else 4  # scikit-image's connectivity=1 either way
     # numba's passes loaded (a small scattered image takes the compiled ones)
     isoflow.label_table(np.random.default_rng(0).integers(0, 50, (24,) * args.ndim, dtype=np.uint32), conn)
-    for n in args.sizes:
-        image = np.random.default_rng(1).integers(0, args.labels, (n,) * args.ndim, dtype=np.uint32)
+    for n, drawn in [(n, drawn) for drawn in args.labels for n in args.sizes]:
+        image = np.random.default_rng(1).integers(0, drawn, (n,) * args.ndim, dtype=np.uint32)
         before = resident_bytes()
         table = isoflow.label_table(image, conn)
         grown = peak_bytes() - before

@@ -613,47 +613,106 @@ def test_a_table_whose_pieces_would_not_fit_is_made_label_by_label(monkeypatch):
     assert table["label"].tolist() == [1, 2, 3]
     with pytest.raises(IsoflowError, match=r"^the label table of [\d,]+ pieces of a label image needs about "):
         label_table(image, method="compiled")
-    monkeypatch.setattr(memory, "default_budget", lambda: 2 << 20)  # below the label-by-label sort (9 bytes a voxel)
-    with pytest.raises(IsoflowError, match=r"^the label table of [\d,]+ pieces .* voxel layers fit: crop the image"):
+    # below the label-by-label pass' masks (a mask and its bit rows: 1.1 bytes a voxel) and its sort (9)
+    monkeypatch.setattr(memory, "default_budget", lambda: 256 << 10)
+    with pytest.raises(IsoflowError, match=r"^the (label table of [\d,]+ pieces|runs of \d+ layers) of a label image "
+                                           r".* voxel layers fit: crop the image"):
         label_table(image)
 
 
 @needs_numba
-def test_auto_takes_the_label_by_label_pass_where_the_pieces_are_many_and_the_labels_few(monkeypatch):
-    """Noise of three labels has a piece for every third voxel: once the
-    pieces are counted, "auto" makes the table label by label (the
-    sooner there), the same table as the one pass'; noise of 40 labels
-    and a map of 64 blocks keep the one pass."""
+def test_auto_takes_the_label_by_label_pass_where_the_pieces_are_many_for_the_values(monkeypatch):
+    """Noise of three labels has a piece for every third voxel, three
+    noisy phases (a third each, which percolate) one for every seventh,
+    and a smooth segmentation of three labels with one voxel in a hundred
+    changed one for every hundred and fifty: each is more than
+    ``FRAGMENTED`` pieces a voxel for each of its four values, so "auto"
+    makes the table label by label (the sooner there: every block of the
+    one pass holds several pieces), the same table as the one pass'; the
+    first two said so by slabs of a few layers, before the whole image's
+    pieces were counted (``SAMPLE_LAYERS``). Noise of 1,000
+    labels, a map of 64 blocks and the smooth segmentation unchanged keep
+    the one pass."""
+    from isoflow.digital import label_by_label
     from isoflow.digital import label_table as module
+    from isoflow.scale import pieces
 
     called = []
-    by_label = module.box_rows
-    monkeypatch.setattr(module, "box_rows", lambda *a, **k: called.append(1) or by_label(*a, **k))
+    by_label, by_masks = module.box_rows, label_by_label._mask_rows
+    monkeypatch.setattr(module, "box_rows", lambda *a, **k: called.append("box_rows") or by_label(*a, **k))
+    monkeypatch.setattr(label_by_label, "_mask_rows", lambda *a, **k: called.append("masks") or by_masks(*a, **k))
     rng = np.random.default_rng(2)
-    few = rng.integers(0, 4, (64, 64, 64)).astype(np.uint8)
-    many = rng.integers(0, 41, (64, 64, 64)).astype(np.uint8)
-    blocks = np.indices(few.shape) // 16
+    noise = rng.integers(0, 4, (64, 64, 64)).astype(np.uint8)
+    phases = rng.integers(0, 3, (64, 64, 64)).astype(np.uint8)
+    smooth = (np.indices(noise.shape)[0] // 22 + 1).astype(np.uint8)  # three slabs
+    salted = smooth.copy()
+    salt = rng.random(smooth.shape) < 0.01
+    salted[salt] = rng.integers(0, 4, int(salt.sum()))
+    many = rng.integers(0, 1001, (64, 64, 64)).astype(np.uint16)
+    blocks = np.indices(noise.shape) // 16
     grains = (blocks[0] * 16 + blocks[1] * 4 + blocks[2] + 1).astype(np.uint8)
-    one_pass = label_table(few, method="compiled")
-    assert not called
-    table = label_table(few)
-    assert called and all(np.array_equal(table[k], one_pass[k]) if table[k].dtype != object
-                          else table[k].tolist() == one_pass[k].tolist() for k in table)
-    called.clear()
-    label_table(many), label_table(grains)
+    counted = []
+    piece_runs = pieces.piece_runs
+    monkeypatch.setattr(pieces, "piece_runs", lambda v, *a, **k: counted.append(v.size) or piece_runs(v, *a, **k))
+    for image, sampled in ((noise, True), (phases, True), (salted, False)):
+        one_pass = label_table(image, method="compiled")
+        assert not called
+        counted.clear()
+        table = label_table(image)
+        assert called[:1] == ["box_rows"]  # (by masks where they pay for the compiled census: the next test)
+        # three slabs of two layers said so, or the whole image's pieces (a slab of that smooth image said not)
+        assert counted[0] == 2 * 64 * 64 and (image.size not in counted) == sampled
+        assert all(np.array_equal(table[k], one_pass[k]) if table[k].dtype != object
+                   else table[k].tolist() == one_pass[k].tolist() for k in table)
+        called.clear()
+    label_table(many), label_table(grains), label_table(smooth)
     assert not called
 
 
 @needs_numba
-def test_the_label_by_label_pass_after_the_pieces_loads_the_compiled_census_once_the_boxes_add_up(monkeypatch):
-    """Taken after the pieces were counted (numba in the process), the
-    label-by-label pass weighs its boxes as a loop's volumes: NumPy's
-    census while they add up to less than the size that pays for loading
-    the compiled one, the compiled census from there (noise of ten labels
-    at 128^3 made every box of the whole image by NumPy's census, three
-    times as slow). Taken for the whole image (few labels, small), every
-    box stays NumPy's."""
+@pytest.mark.parametrize("connectivity", [6, 26])
+def test_a_noisy_segmentation_label_by_label_equals_analyze_in_a_fresh_process(monkeypatch, connectivity):
+    """Where the masks of a noisy segmentation pay for loading the
+    compiled census (as in a fresh process, whose tally is empty), each
+    label's row comes from the census of its mask: rows equal to
+    ``analyze`` of each label at both connectivities, a label asked for
+    that is not in the image a row of no voxel, and label 0's row with
+    ``background``; where they would not pay, each label's box goes
+    through ``analyze`` after one sort."""
+    from isoflow.digital import closed_surfaces, label_by_label
+    from isoflow.scale import compiled
+
+    monkeypatch.setattr(closed_surfaces, "census_loaded", lambda: False)
+    monkeypatch.setattr(label_by_label, "census_loaded", lambda: False)
+    compiled.reset_tally()
+    masks = []
+    by_masks = label_by_label._mask_rows
+    monkeypatch.setattr(label_by_label, "_mask_rows", lambda *a, **k: masks.append(1) or by_masks(*a, **k))
+    image = np.random.default_rng(7).integers(0, 4, (66, 64, 65)).astype(np.int16)
+    image[image == 2] = -2  # a negative label, sorted before 0
+    monkeypatch.setattr(compiled, "MIN_VOXELS", 200_000)  # the census from 400,000 voxels: two masks
+    table = assert_rows_equal_analyze(image, connectivity, labels=[3, 5, -2, 1])
+    assert masks and table["label"].tolist() == [3, 5, -2, 1] and table["voxels"][1] == 0
+    everything = assert_rows_equal_analyze(image, connectivity, background=True)
+    assert everything["label"].tolist() == [-2, 0, 1, 3]
+    masks.clear()
+    monkeypatch.setattr(compiled, "MIN_VOXELS", 2_000_000)  # three masks of 274,560 voxels do not pay
+    compiled.reset_tally()
+    again = label_table(image, connectivity)
+    assert not masks and again["euler_characteristic"].tolist() == table["euler_characteristic"][[2, 3, 0]].tolist()
+
+
+@needs_numba
+def test_the_label_by_label_sort_weighs_its_boxes_as_a_loop_s_volumes(monkeypatch):
+    """The sort's pass, taken after the pieces were counted (numba in the
+    process: where the one pass would not fit), weighs its boxes as a
+    loop's volumes: NumPy's census while they add up to less than the
+    size that pays for loading the compiled one, the compiled census from
+    there (noise of ten labels at 128^3 made every box of the whole image
+    by NumPy's census, three times as slow). Taken for the whole image
+    (few labels, small), every box stays NumPy's."""
     from isoflow.digital import analysis, closed_surfaces
+    from isoflow.digital.label_by_label import box_rows
     from isoflow.scale import compiled
 
     monkeypatch.setattr(compiled, "MIN_VOXELS", 200_000)  # the census from 400,000 voxels: two boxes of 66^3
@@ -661,13 +720,15 @@ def test_the_label_by_label_pass_after_the_pieces_loads_the_compiled_census_once
     methods = []
     analyze = analysis.analyze
     monkeypatch.setattr(analysis, "analyze", lambda *a, **k: methods.append(k["method"]) or analyze(*a, **k))
-    image = np.random.default_rng(4).integers(0, 4, (64, 64, 64)).astype(np.uint8)  # 3 labels and 0: fragmented
-    table = label_table(image, 26)
+    image = np.random.default_rng(4).integers(0, 4, (64, 64, 64)).astype(np.uint8)  # 3 labels and 0
+    compiled.reset_tally()
+    found = box_rows(image, 26, None, True, weighed=True)
     assert methods == ["numpy", "compiled", "compiled"]
-    for row, label in enumerate(table["label"].tolist()):
+    assert found["label"].tolist() == [1, 2, 3]
+    for row, label in enumerate(found["label"].tolist()):
         report = analyze(image == label, 26)
-        assert table["euler_characteristic"][row] == report["euler_characteristic"]
-        assert [table[f"b{d}"][row] for d in range(3)] == list(report["betti"])
+        assert found["features"][row][0] == 8 * report["euler_characteristic"]
+        assert [found["b0"][row], found["b2"][row]] == [report["betti"][0], report["betti"][2]]
     methods.clear()
     compiled.reset_tally()
     label_table(image[:6, :6, :6], 26)  # NumPy's pass for the whole image: numba need not load

@@ -75,11 +75,19 @@ def cell_texts(column: np.ndarray, joined: str, booleans: tuple[str, str]) -> li
         values = column.tolist()
         # the texts of the distinct tuples (a table's genera repeat a few)
         if joined == ";":
-            text = {v: ";".join(map(str, v)) for v in set(values)}
+            text = {v: _joined(v, ";") for v in set(values)}
         else:
-            text = {v: "[" + joined.join(map(str, v)) + "]" for v in set(values)}
+            text = {v: "[" + _joined(v, joined) + "]" for v in set(values)}
         return [text[v] for v in values]
     return [booleans[v] for v in column.tolist()]
+
+
+def _joined(values: tuple, joined: str) -> str:
+    """The integers ``values`` as text joined by ``joined``, each distinct
+    one made text once (a label of noise has a hundred thousand surfaces,
+    nearly all of genus 0)."""
+    texts = {v: str(v) for v in set(values)}
+    return joined.join(map(texts.__getitem__, values))
 
 
 def non_finite_text(value: float, missing: str, joined: str) -> str:

@@ -733,9 +733,13 @@ def subtree_sums(up: np.ndarray, root: int, values: np.ndarray) -> np.ndarray:
         depth += depth[anc]  # the root's depth stays 0
         anc = anc[anc]
     total = np.array(values, np.int64)
+    # a column at a time: NumPy's add.at has a fast path for 1D arrays only
+    columns = [np.ascontiguousarray(c) for c in total.reshape(len(total), -1).T]
     order = np.argsort(depth, kind="stable")
     ends = np.searchsorted(depth[order], np.arange(depth.max(initial=0) + 2))
     for d in range(depth.max(initial=0), 0, -1):
         nodes = order[ends[d]:ends[d + 1]]
-        np.add.at(total, up[nodes], total[nodes])
-    return total
+        parents = up[nodes]
+        for column in columns:
+            np.add.at(column, parents, column[nodes])
+    return np.stack(columns, axis=1).reshape(total.shape)

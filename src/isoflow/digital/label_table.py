@@ -36,7 +36,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from functools import cache, cached_property
+from functools import cached_property
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -46,15 +46,15 @@ from ..errors import IsoflowError, check_switch, given_text, scalar_given, warn,
 from ..results import fields_repr, same_fields
 from ..scale.arrays import FILL_READ, FILL_ZERO, as_array, fill_as, refuse_object
 from ..scale.memory import budget_held, check_fits
-from .closed_surfaces import sweep_tables, use_census
-from .connectivity import check_connectivity, resolve_connectivity
+from .closed_surfaces import sweep_tables
+from .connectivity import resolve_connectivity
 from .float64 import scaled_counts, scaled_faces, underflow_line, unheld_columns
 from .frames import space_given
-from .indices import NOT_WELL_COMPOSED, a_lut, class_lut, euler_lut
+from .label_by_label import box_rows
 from .lattice import DigitalObject
 from .report import Report
-from .surface import face_slots, pinch_lut, slot_octants
 from .units import unit_given
+from .vertex_features import ENERGY, EULER, FACES, NWC, PINCH, feature_table
 
 if TYPE_CHECKING:
     from ..scale.ticks import Ticks
@@ -66,37 +66,6 @@ COLUMNS = ("label", "voxels", "volume", "surface_area", "bbox", "centroid", "eul
            "doubled_edges")
 #: the columns that need the surfaces (left out with ``surfaces=False``)
 SURFACE_COLUMNS = ("surfaces", "genera", "surface_euler", "pinched_vertices", "doubled_edges")
-
-#: the feature table's columns (see :func:`feature_table`)
-_EULER, _CLASSES, _NWC, _A_WC, _ENERGY, _PINCH, _FACES = 0, slice(1, 10), 10, 11, 12, 13, slice(14, 17)
-
-
-@cache
-def feature_table(connectivity: int = 6) -> np.ndarray:
-    """(256, 17) int64: what one vertex of each configuration adds to its
-    label's row: the Euler share ``8 x`` (eq. 4.10), one in its class's
-    column of ``n`` (nine, eq. 4.9), one if it is not well-composed, ``a``
-    and ``k = a^2`` where it is well-composed (eq. 4.12, 5.22), one at a
-    pinch (:func:`~isoflow.digital.surface.pinch_lut`), and its boundary
-    face slots per normal axis (four per face)."""
-    check_connectivity(3, connectivity)
-    cls = class_lut()
-    a = a_lut(connectivity).astype(np.int64)
-    on = cls >= 0
-    out = np.zeros((256, 17), np.int64)
-    out[:, _EULER] = euler_lut(3, connectivity)
-    out[np.flatnonzero(on), 1 + cls[on]] = 1
-    out[:, _NWC] = cls == NOT_WELL_COMPOSED
-    out[:, _A_WC] = np.where(on, a, 0)
-    out[:, _ENERGY] = np.where(on, a * a, 0)
-    out[:, _PINCH] = pinch_lut(connectivity)
-    codes = np.arange(256)
-    for slot in range(12):
-        lo, hi = slot_octants(slot)
-        out[:, 14 + slot // 4] += ((codes >> lo) & 1) != ((codes >> hi) & 1)
-    assert (out[:, _FACES].sum(axis=1) == face_slots()).all()
-    return out
-
 
 @dataclass(frozen=True, eq=False, repr=False)
 class LabelImage:
@@ -437,9 +406,10 @@ def table_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
     graph take hundreds of bytes a voxel), each label's own ``analyze``
     (:func:`box_rows`), which needs tens and gives the same table; where
     neither fits, the compiled pass' refusal, which names what would. And
-    where the pieces, once counted, say that pass is the sooner (a noisy
-    segmentation of a few labels, :data:`FRAGMENTED`). ``progress``: as
-    :func:`label_table`'s, for the passes taken (:data:`STAGES`)."""
+    where the pieces, once counted, or slabs of them say that pass is the
+    sooner (a noisy segmentation, :data:`FRAGMENTED`), unless it does not
+    fit. ``progress``: as :func:`label_table`'s, for the passes taken
+    (:data:`STAGES`)."""
     from ..errors import DoesNotFit
     from ..scale.ticks import Ticks
 
@@ -447,22 +417,26 @@ def table_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
     if not _use_compiled(vol, method):
         return box_rows(vol, conn, wanted, surfaces, background, ticks)
     # from here numba is loaded (it counts the pieces): the label-by-label pass weighs its boxes as a loop's volumes
-    first = None
+    first = present = None
     try:
         found = piece_rows(vol, conn, wanted, surfaces, background, rather=method == "auto", ticks=ticks)
-        if found is not None:
+        if isinstance(found, dict):
             ticks.finish()
             return found
+        present = found
     except DoesNotFit as refusal:
         if method != "auto":
             raise
         first = refusal
     try:
-        return box_rows(vol, conn, wanted, surfaces, background, ticks, weighed=True)
+        return box_rows(vol, conn, wanted, surfaces, background, ticks, weighed=True, present=present)
     except DoesNotFit:
-        if first is None:
+        if first is not None:
+            raise first from None
+        if present is None:
             raise
-        raise first from None
+    # taken on speed, the label-by-label pass does not fit: the one pass, or its refusal, which names what would fit
+    return piece_rows(vol, conn, wanted, surfaces, background, ticks=Ticks(progress, STAGES))
 
 
 def checked_image(image, where: str) -> np.ndarray:
@@ -824,14 +798,23 @@ def later_bytes(pieces: int, voxels_per_piece: float = 1.0) -> int:
 
 
 #: ``"auto"`` takes the label-by-label pass, once the pieces are counted,
-#: where they are this share of the voxels or more and the values
-#: :data:`FEW_VALUES` or fewer: a noisy segmentation of a few phases, whose
-#: one pass walks a piece every few voxels where ``analyze`` of each label
-#: sweeps its box once; with many values, or fewer pieces (noisy phases of
-#: a smooth segmentation), the one pass is the sooner (the measures behind
-#: both bounds: docs/labels.md, "NumPy path")
-FRAGMENTED = 0.25
-FEW_VALUES = 32
+#: where they are this share of the voxels or more for each value of the
+#: image: the one pass spends about 3 us a piece on a noisy segmentation
+#: (every block holds pieces of several values, whose pairs it adds up),
+#: the census of each label's mask about 3 ns a voxel of the whole image and
+#: a third of a microsecond a piece (the measures: docs/labels.md, "NumPy
+#: path"); a smooth segmentation, or one of hundreds of labels, keeps the
+#: one pass
+FRAGMENTED = 0.0015
+#: before the pieces of the whole image are counted, slabs of this share of
+#: its layers along axis 0 each, at a quarter, a half and three quarters of
+#: it, are cut into pieces: where each holds :data:`SAMPLE_MARGIN` times
+#: :data:`FRAGMENTED` pieces a voxel for each value of the image or more,
+#: the label-by-label pass is taken without the whole count (a slab cuts
+#: the pieces that cross it, so it overstates the image's pieces a voxel:
+#: the margin)
+SAMPLE_LAYERS = 1 / 64
+SAMPLE_MARGIN = 2
 
 
 #: the shares of a label table's progress bar of each stage of its passes
@@ -844,13 +827,15 @@ STAGES = {"pieces": 10, "vertices": 45, "graph": 10, "walks": 35}
 
 
 def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool,
-               background: bool = False, rather: bool = False, ticks: Ticks | None = None) -> dict | None:
+               background: bool = False, rather: bool = False, ticks: Ticks | None = None) -> dict | np.ndarray:
     """The rows by the compiled passes: the pieces, one vertex pass, the
     graph of pieces label by label (see the module docs); an image of more
     voxels than the pieces are numbered in, in slabs along axis 0 as a
     store is read (:func:`slab_rows`). ``background``: with ``wanted``
-    None, label 0's row too. With ``rather``: None where the pieces say
-    the label-by-label pass is the sooner (:data:`FRAGMENTED`).
+    None, label 0's row too. With ``rather``: where the pieces say the
+    label-by-label pass is the sooner (:data:`FRAGMENTED`), not the rows
+    but the image's values (:func:`present_labels`), which that pass
+    takes.
     ``ticks``: the progress (:data:`STAGES`), and where the passes stop on
     a signal."""
     from ..scale.pieces import MAX_PIECE_VOXELS, piece_runs, vertex_pass
@@ -862,9 +847,15 @@ def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
         return slab_rows(np.ascontiguousarray(vol), conn, wanted, surfaces, [vol.shape[0]],
                          progress=None if ticks is None or ticks.progress is None else ticks.follow,
                          background=background)
+    if rather:
+        present = sampled_fragmented(vol)
+        if present is not None:
+            return present
     pieces = piece_runs(vol, later=later_bytes, ticks=ticks)
-    if rather and pieces["n"] >= FRAGMENTED * vol.size and len(distinct(pieces["values"][1:])[0]) <= FEW_VALUES:
-        return None
+    if rather and pieces["n"] >= FRAGMENTED * vol.size:  # (the image holds one value at least)
+        present = present_labels(pieces["values"], vol.dtype)
+        if pieces["n"] >= FRAGMENTED * len(present) * vol.size:
+            return present
     if background:  # every label present, 0 among them: the pieces say which
         wanted = present_labels(pieces["values"], vol.dtype)
     want = wanted_pieces(pieces["values"], vol.dtype, wanted)
@@ -872,6 +863,76 @@ def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
     passed = vertex_pass(vol, pieces, want, feature_table(conn), pass_tables(conn, surfaces), keep_runs=False,
                          joined=False, ticks=ticks)
     return rows_of_pieces(pieces, passed, vol.dtype, conn, wanted, ticks)
+
+
+def sampled_fragmented(vol: np.ndarray) -> np.ndarray | None:
+    """The image's values (as :func:`present_labels` gives them) where
+    slabs of its layers say that the label-by-label pass is the sooner
+    (:data:`SAMPLE_LAYERS`), else None (and where its values span more
+    than its voxels: the pieces find those).
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> sampled_fragmented(rng.integers(0, 3, (64, 32, 32)).astype(np.uint8)).tolist()  # noise of three values
+    [0, 1, 2]
+    >>> sampled_fragmented(np.repeat(np.arange(64, dtype=np.uint8) // 16, 1024).reshape(64, 32, 32)) is None
+    True
+    """
+    from ..errors import DoesNotFit
+    from ..scale.pieces import piece_runs
+
+    nx = vol.shape[0]
+    layers = max(2, round(SAMPLE_LAYERS * nx))
+    if 3 * layers > nx:
+        return None
+    least = None
+    with budget_held():  # the memory available read once for the three slabs
+        for at in (nx // 4, nx // 2, 3 * nx // 4):
+            slab = vol[at - layers // 2:at - layers // 2 + layers]
+            try:
+                pieces = piece_runs(np.ascontiguousarray(slab))
+            except DoesNotFit:  # the whole image's count says what fits
+                return None
+            share = pieces["n"] / slab.size
+            values = len(present_labels(pieces["values"], vol.dtype))
+            if share < SAMPLE_MARGIN * FRAGMENTED * values:
+                return None
+            least = share if least is None else min(least, share)
+    present = image_values(vol)
+    if present is None or least < SAMPLE_MARGIN * FRAGMENTED * len(present):
+        return None
+    return present
+
+
+#: the voxels of an image read at a time by :func:`image_values`
+VALUES_STEP = 1 << 20
+
+
+def image_values(vol: np.ndarray) -> np.ndarray | None:
+    """The values of an integer image, in increasing order, in its type,
+    read a step of voxels at a time (:data:`VALUES_STEP`) into a table of
+    the span of its values; None where that span is wider than
+    :func:`distinct` counts in a table.
+
+    Examples
+    --------
+    >>> image_values(np.array([[[7, -2], [7, 0]]], np.int8)).tolist()
+    [-2, 0, 7]
+    >>> image_values(np.array([[[0, 2**40]]], np.uint64)) is None  # ids spread wide
+    True
+    """
+    if vol.size == 0:
+        return np.zeros(0, vol.dtype)
+    lo, hi = int(vol.min()), int(vol.max())
+    if hi - lo > DISTINCT_SPAN * vol.size + DISTINCT_SLACK:
+        return None
+    wide = np.int64 if vol.dtype.kind == "i" else np.uint64  # a narrow type wraps round
+    seen = np.zeros(hi - lo + 1, bool)
+    flat = vol.reshape(-1)
+    for start in range(0, flat.size, VALUES_STEP):
+        seen[(flat[start:start + VALUES_STEP].astype(wide) - wide(lo)).astype(np.intp)] = True
+    return (np.flatnonzero(seen).astype(wide) + wide(lo)).astype(vol.dtype)
 
 
 def rows_in_image_order(found: dict, axes: Sequence[int]) -> dict:
@@ -905,7 +966,7 @@ def rows_in_image_order(found: dict, axes: Sequence[int]) -> dict:
     for key in ("lo", "hi", "sums"):
         out[key] = found[key][:, back]
     out["features"] = found["features"].copy()
-    out["features"][:, _FACES] = found["features"][:, _FACES][:, back]
+    out["features"][:, FACES] = found["features"][:, FACES][:, back]
     return out
 
 
@@ -1391,111 +1452,6 @@ def same_pieces(total: int, same: list) -> np.ndarray:
     return rank[comp]
 
 
-def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool,
-             background: bool = False, ticks: Ticks | None = None, weighed: bool = False) -> dict:
-    """The rows by NumPy: ``analyze`` of each label's box plus one voxel
-    (outside the box everything is the label's complement, so the report
-    is the whole image's), the voxels of every label from one sort;
-    ``background``: with ``wanted`` None, label 0's row too; ``ticks``:
-    the progress, the rest of it counted in labels. Each box's census is
-    NumPy's unless the compiled one is loaded or the box is large enough
-    to pay for loading it (:func:`~isoflow.digital.closed_surfaces.use_census`);
-    with ``weighed`` (numba already in the process: the one pass counted
-    the pieces first), the boxes add up as the volumes of a loop do (the
-    ski-rental rule of ``"auto"``), so that the census is loaded once
-    they reach the size that pays for it (each label of noise has the
-    whole image for its box)."""
-    from ..scale.ticks import silent
-
-    ticks = silent(ticks)
-    with budget_held():  # the memory available read once, for the sort's check and every box's
-        found = _box_rows(vol, conn, wanted, surfaces, background, ticks, weighed)
-    ticks.finish()
-    return found
-
-
-def _box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool, background: bool,
-              ticks: Ticks, weighed: bool) -> dict:
-    """:func:`box_rows` within its budget."""
-    from .analysis import analyze
-
-    flat = vol.reshape(-1)
-    shape = "x".join(map(str, vol.shape))
-    # the voxels' order and the values sorted by it
-    check_fits((8 + flat.itemsize) * flat.size, f"the label table of a {shape} label image, label by label")
-    order = np.argsort(flat, kind="stable")
-    values, starts = np.unique(flat[order], return_index=True)
-    labels = (values if background else values[values != 0]) if wanted is None else wanted.astype(values.dtype)
-    ends = np.append(starts[1:], flat.size)
-    # a label's voxels' coordinates along one axis at a time, and its work on them (each box's analyze checks its
-    # own need)
-    most = int((ends - starts).max(initial=0))
-    check_fits((8 + flat.itemsize) * flat.size + 16 * most, f"the label table of a {shape} label image, label by label")
-    found = {"label": labels, "voxels": np.zeros(len(labels), np.int64), "sums": np.zeros((len(labels), 3)),
-             "lo": np.zeros((len(labels), 3), np.int64), "hi": np.full((len(labels), 3), -1, np.int64),
-             "features": np.zeros((len(labels), 17), np.int64), "doubled": np.zeros(len(labels), np.int64),
-             "b0": np.zeros(len(labels), np.int64), "b2": np.zeros(len(labels), np.int64)}
-    surfs: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # per label: its rows, chi and faces
-    ticks.rest(len(labels))
-    for row, label in enumerate(labels):
-        ticks.reached(0, row)  # the labels done
-        at = np.searchsorted(values, label)
-        if at == len(values) or values[at] != label:
-            continue
-        lo, hi, sums = _extent(order[starts[at]:ends[at]], vol.shape)
-        box = np.pad(vol[tuple(slice(a, b + 1) for a, b in zip(lo, hi))] == label, 1)
-        # the boxes count in the tally of "auto" only where numba is loaded already (weighed): where NumPy's pass
-        # was chosen for the whole image, counting them would load numba part way through this call
-        census = use_census(box, surfaces, record=weighed)
-        report = analyze(box, conn, surfaces=surfaces, method="compiled" if census else "numpy")
-        found["voxels"][row], found["sums"][row] = ends[at] - starts[at], sums
-        found["lo"][row], found["hi"][row] = lo, hi
-        found["b0"][row], found["b2"][row] = report["betti"][0], report["betti"][2]
-        found["features"][row] = _report_features(report, box)
-        found["doubled"][row] = report.get("doubled_edges", 0)
-        if report.surfaces is not None:  # the report's columns: a label of noise has very many surfaces
-            table = report.surfaces.columns()
-            surfs.append((np.full(len(report.surfaces), row, np.int64), table["euler_characteristic"], table["faces"]))
-    rows_chi_faces = [np.concatenate(c) if c else np.zeros(0, np.int64) for c in zip(*surfs)] or [np.zeros(0, np.int64)] * 3
-    found.update(surface_rows=rows_chi_faces[0], surface_chi=rows_chi_faces[1], surface_faces=rows_chi_faces[2])
-    return found
-
-
-def _extent(flat_index: np.ndarray, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The lowest and highest corner and the coordinate sums of the voxels
-    at ``flat_index`` (C order) of an image of ``shape``, one axis at a
-    time: one array of the voxels' coordinates held at once, not three and
-    their stack.
-
-    Examples
-    --------
-    >>> lo, hi, sums = _extent(np.array([5, 11, 12]), (2, 3, 4))  # (0, 1, 1), (0, 2, 3), (1, 0, 0)
-    >>> lo.tolist(), hi.tolist(), sums.tolist()
-    ([0, 0, 0], [1, 2, 3], [1, 3, 4])
-    """
-    lo, hi, sums = (np.zeros(len(shape), np.int64) for _ in range(3))
-    step = 1
-    for d in range(len(shape) - 1, -1, -1):
-        coordinate = flat_index // step % shape[d]
-        lo[d], hi[d], sums[d] = coordinate.min(), coordinate.max(), coordinate.sum()
-        step *= shape[d]
-    return lo, hi, sums
-
-
-def _report_features(report: Mapping, box: np.ndarray) -> np.ndarray:
-    """The feature sums of :func:`feature_table` from a report and the
-    (padded) box: the faces per axis counted on the box."""
-    out = np.zeros(17, np.int64)
-    out[_EULER] = 8 * report["euler_characteristic"]
-    out[_CLASSES] = report["n"]
-    out[_NWC] = report["non_well_composed"]
-    out[_A_WC] = report["a_dot_n_well_composed"]
-    out[_ENERGY] = report["energy"]
-    out[_PINCH] = report.get("pinched_vertices", 0)
-    out[_FACES] = [4 * np.count_nonzero(np.diff(box, axis=d)) for d in range(3)]
-    return out
-
-
 def genera_column(rows: np.ndarray, genera: np.ndarray, n: int) -> np.ndarray:
     """Per row of ``n``, the tuple of the genera of its surfaces
     (``rows``: each surface's row, in order). Rows of none or one surface,
@@ -1537,7 +1493,7 @@ def columns(found: dict, spacing: np.ndarray, origin: np.ndarray, surfaces: bool
     # the voxel size, and one below its smallest number is 0 with a warning
     out: dict[str, np.ndarray] = {"label": found["label"], "voxels": voxels,
                                   "volume": scaled_counts(voxels, spacing)}
-    faces = features[:, _FACES] // 4
+    faces = features[:, FACES] // 4
     # as analyze sums them (scaled_faces): the two agree to the last bit
     out["surface_area"] = scaled_faces(faces, spacing)
     lost = [what for what, values, counts in (("volumes", out["volume"], voxels),
@@ -1566,18 +1522,18 @@ def columns(found: dict, spacing: np.ndarray, origin: np.ndarray, surfaces: bool
             mean = found["sums"][:, d] / voxels
             mean += 0.5
             out[f"centroid-{d}"] = world(mean, d)
-    chi = features[:, _EULER] // 8
+    chi = features[:, EULER] // 8
     out["euler_characteristic"] = chi
     out["b0"], out["b1"], out["b2"] = found["b0"], found["b0"] + found["b2"] - chi, found["b2"]
     for i in range(9):
         out[f"n-{i}"] = features[:, 1 + i]
-    out["non_well_composed"] = features[:, _NWC]
-    out["energy"] = features[:, _ENERGY]
+    out["non_well_composed"] = features[:, NWC]
+    out["energy"] = features[:, ENERGY]
     if surfaces:
         rows, chis = found["surface_rows"], found["surface_chi"]
         out["surfaces"] = np.bincount(rows, minlength=len(voxels)).astype(np.int64)
         out["genera"] = genera_column(rows, 1 - np.asarray(chis, np.int64) // 2, len(voxels))
         out["surface_euler"] = np.bincount(rows, chis, len(voxels)).astype(np.int64)
-        out["pinched_vertices"] = features[:, _PINCH]
+        out["pinched_vertices"] = features[:, PINCH]
         out["doubled_edges"] = found["doubled"]
     return out
