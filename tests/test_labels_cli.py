@@ -817,7 +817,8 @@ def test_a_label_table_beyond_the_budget_is_refused_in_one_line(tmp_path, capsys
     monkeypatch.setattr(memory, "default_budget", lambda: 40_000_000)
     assert [r["voxels"] for r in json.loads(run(capsys, "info", tmp_path / "grains.npy", "--labels", "--json"))
             ["labels"]] == [64 * 256 * 256] * 4
-    noise = rng.integers(1, 200, (256, 256, 256)).astype(np.uint8)
+    # (noise of a few hundred labels is made label by label in that budget: a mask at a time)
+    noise = rng.integers(1, 2000, (256, 256, 256)).astype(np.uint16)
     np.save(tmp_path / "noise.npy", noise)
     fails(capsys, "info", tmp_path / "noise.npy", "--labels", words=("label image", "needs about", "budget"))
 

@@ -38,6 +38,7 @@ from .closed_surfaces import census_loaded, compiled_census, use_census
 from .vertex_features import A_WC, CLASSES, ENERGY, EULER, FACES, NWC, PINCH, feature_table
 
 if TYPE_CHECKING:
+    from ..results import ClosedSurfaces
     from ..scale.ticks import Ticks
 
 
@@ -47,7 +48,8 @@ def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bo
     """The rows label by label (see the module docs). ``background``: with
     ``wanted`` None, label 0's row too; ``ticks``: the progress, the rest
     of it counted in labels; ``present``: the image's values, in order,
-    where the pieces have found them (else the sort finds them).
+    where they were found before (by the pieces, or by a count where
+    slabs of pieces said so; else the sort finds them).
 
     Each box's census is NumPy's unless the compiled one is loaded or the
     box is large enough to pay for loading it
@@ -76,7 +78,7 @@ def _by_masks(vol: np.ndarray, wanted: np.ndarray | None, background: bool, pres
               surfaces: bool) -> np.ndarray | None:
     """The labels of the rows, to be taken by their masks
     (:func:`_mask_rows`), or None where the sort is to find them: the
-    masks are taken where the pieces have found the image's values
+    masks are taken where the image's values were found before
     (``present``) and the compiled census is loaded, or where the masks
     together pay for loading it (the ski-rental threshold of ``"auto"``,
     :func:`~isoflow.scale.compiled.weigh`)."""
@@ -107,7 +109,7 @@ def _with_surfaces(found: dict, surfs: list[tuple[np.ndarray, np.ndarray, np.nda
     return found
 
 
-def _surfaces_of(row: int, surfaces) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _surfaces_of(row: int, surfaces: ClosedSurfaces) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One row's entry of ``surfs`` (:func:`_with_surfaces`) from its
     :class:`~isoflow.results.ClosedSurfaces`: their columns, as a label
     of noise has very many surfaces."""

@@ -436,7 +436,9 @@ def table_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
         if present is None:
             raise
     # taken on speed, the label-by-label pass does not fit: the one pass, or its refusal, which names what would fit
-    return piece_rows(vol, conn, wanted, surfaces, background, ticks=Ticks(progress, STAGES))
+    found = piece_rows(vol, conn, wanted, surfaces, background, ticks=Ticks(progress, STAGES))
+    assert isinstance(found, dict)  # (the values come only where it is asked which pass is the sooner)
+    return found
 
 
 def checked_image(image, where: str) -> np.ndarray:
@@ -868,8 +870,9 @@ def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
 def sampled_fragmented(vol: np.ndarray) -> np.ndarray | None:
     """The image's values (as :func:`present_labels` gives them) where
     slabs of its layers say that the label-by-label pass is the sooner
-    (:data:`SAMPLE_LAYERS`), else None (and where its values span more
-    than its voxels: the pieces find those).
+    (:data:`SAMPLE_LAYERS`), else None (and where its values are spread
+    too wide to count in a table, :func:`image_values`: the pieces find
+    those).
 
     Examples
     --------
@@ -886,7 +889,7 @@ def sampled_fragmented(vol: np.ndarray) -> np.ndarray | None:
     layers = max(2, round(SAMPLE_LAYERS * nx))
     if 3 * layers > nx:
         return None
-    least = None
+    least = float("inf")
     with budget_held():  # the memory available read once for the three slabs
         for at in (nx // 4, nx // 2, 3 * nx // 4):
             slab = vol[at - layers // 2:at - layers // 2 + layers]
@@ -898,7 +901,7 @@ def sampled_fragmented(vol: np.ndarray) -> np.ndarray | None:
             values = len(present_labels(pieces["values"], vol.dtype))
             if share < SAMPLE_MARGIN * FRAGMENTED * values:
                 return None
-            least = share if least is None else min(least, share)
+            least = min(least, share)
     present = image_values(vol)
     if present is None or least < SAMPLE_MARGIN * FRAGMENTED * len(present):
         return None
