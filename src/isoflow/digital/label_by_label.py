@@ -28,7 +28,7 @@ A label's voxels are found in one of two ways:
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -92,6 +92,18 @@ def _by_masks(vol: np.ndarray, wanted: np.ndarray | None, background: bool, pres
     return None
 
 
+def _rows_present(labels: np.ndarray, values: np.ndarray, ticks: Ticks) -> Iterator[tuple[int, object, int]]:
+    """Each row of ``labels`` whose label is among the image's ``values``
+    (in order), with its label and its index there; the rows done told to
+    ``ticks``, the rest of whose progress they are."""
+    ticks.rest(len(labels))
+    for row, label in enumerate(labels):
+        ticks.reached(0, row)
+        at = int(np.searchsorted(values, label))
+        if at < len(values) and values[at] == label:
+            yield row, label, at
+
+
 def _empty_rows(labels: np.ndarray) -> dict:
     """The rows' arrays for ``labels``, each label absent until found."""
     n = len(labels)
@@ -130,12 +142,7 @@ def _mask_rows(vol: np.ndarray, conn: int, labels: np.ndarray, present: np.ndarr
     table = feature_table(conn)
     found = _empty_rows(labels)
     surfs = []
-    ticks.rest(len(labels))
-    for row, label in enumerate(labels):
-        ticks.reached(0, row)  # the labels done
-        at = np.searchsorted(present, label)
-        if at == len(present) or present[at] != label:
-            continue
+    for row, label, _ in _rows_present(labels, present, ticks):
         census = compiled_census(vol == label, conn, surfaces)
         hist = census["hist"]
         found["voxels"][row] = voxels_from_histogram(hist)
@@ -168,12 +175,7 @@ def _sorted_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces
     check_fits((8 + flat.itemsize) * flat.size + 16 * most, f"the label table of a {shape} label image, label by label")
     found = _empty_rows(labels)
     surfs = []
-    ticks.rest(len(labels))
-    for row, label in enumerate(labels):
-        ticks.reached(0, row)  # the labels done
-        at = np.searchsorted(values, label)
-        if at == len(values) or values[at] != label:
-            continue
+    for row, label, at in _rows_present(labels, values, ticks):
         lo, hi, sums = _extent(order[starts[at]:ends[at]], vol.shape)
         box = np.pad(vol[tuple(slice(a, b + 1) for a, b in zip(lo, hi))] == label, 1)
         # the boxes count in the tally of "auto" only where numba is loaded already (weighed): where NumPy's pass
