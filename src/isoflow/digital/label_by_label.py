@@ -13,8 +13,9 @@ sweeps the image once.
 
 A label's voxels are found in one of two ways:
 
-* where the pieces have found the image's values (a noisy segmentation)
-  and the compiled census is in use, each label's mask of the whole image
+* where the image's values are known (a noisy segmentation: found by its
+  pieces, or counted once slabs of its pieces said so) and the compiled
+  census is in use, each label's mask of the whole image
   goes through :func:`~isoflow.digital.closed_surfaces.compiled_census`,
   which reads the voxels' extent off its bit rows; its configuration
   histogram gives every feature of the row (its product with
