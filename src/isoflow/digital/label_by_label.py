@@ -180,7 +180,7 @@ def _sorted_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces
         lo, hi, sums = _extent(order[starts[at]:ends[at]], vol.shape)
         box = np.pad(vol[tuple(slice(a, b + 1) for a, b in zip(lo, hi))] == label, 1)
         # the boxes count in the tally of "auto" only where numba is loaded already (weighed): where NumPy's pass
-        # was chosen for the whole image, counting them would load numba part way through this call
+        # is the one taken for the whole image, counting them would load numba part way through this call
         census = use_census(box, surfaces, record=weighed)
         report = analyze(box, conn, surfaces=surfaces, method="compiled" if census else "numpy")
         found["voxels"][row], found["sums"][row] = ends[at] - starts[at], sums

@@ -930,12 +930,11 @@ def image_values(vol: np.ndarray) -> np.ndarray | None:
     lo, hi = int(vol.min()), int(vol.max())
     if hi - lo > DISTINCT_SPAN * vol.size + DISTINCT_SLACK:
         return None
-    wide = np.int64 if vol.dtype.kind == "i" else np.uint64  # a narrow type wraps round
     seen = np.zeros(hi - lo + 1, bool)
     flat = vol.reshape(-1)
     for start in range(0, flat.size, VALUES_STEP):
-        seen[(flat[start:start + VALUES_STEP].astype(wide) - wide(lo)).astype(np.intp)] = True
-    return (np.flatnonzero(seen).astype(wide) + wide(lo)).astype(vol.dtype)
+        seen[_offsets(flat[start:start + VALUES_STEP], lo)] = True
+    return _seen_values(seen, lo, vol.dtype)
 
 
 def rows_in_image_order(found: dict, axes: Sequence[int]) -> dict:
@@ -1137,12 +1136,30 @@ def distinct(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     lo, hi = int(values.min()), int(values.max())
     if hi - lo > DISTINCT_SPAN * len(values) + DISTINCT_SLACK:
         return np.unique(values, return_inverse=True)
-    wide = values.astype(np.int64 if values.dtype.kind == "i" else np.uint64)  # a narrow type wraps round
-    shift = (wide - wide.dtype.type(lo)).astype(np.intp)
+    shift = _offsets(values, lo)
     seen = np.zeros(hi - lo + 1, bool)
     seen[shift] = True
-    kinds = np.flatnonzero(seen).astype(wide.dtype) + wide.dtype.type(lo)
-    return kinds.astype(values.dtype), (np.cumsum(seen) - 1)[shift]
+    return _seen_values(seen, lo, values.dtype), (np.cumsum(seen) - 1)[shift]
+
+
+def _wide(dtype) -> type:
+    """The 64-bit integer type of ``dtype``'s sign, in which a value less
+    the lowest does not wrap round as in a narrow type."""
+    return np.int64 if np.dtype(dtype).kind == "i" else np.uint64
+
+
+def _offsets(values: np.ndarray, lo: int) -> np.ndarray:
+    """Each of the integers ``values`` less ``lo`` (their lowest), as
+    indices into a table of their span."""
+    wide = _wide(values.dtype)
+    return (values.astype(wide) - wide(lo)).astype(np.intp)
+
+
+def _seen_values(seen: np.ndarray, lo: int, dtype) -> np.ndarray:
+    """The values marked in a table of a span from ``lo`` (:func:`_offsets`),
+    in order, in ``dtype``."""
+    wide = _wide(dtype)
+    return (np.flatnonzero(seen).astype(wide) + wide(lo)).astype(dtype)
 
 
 def at_rows(column: np.ndarray, rows: np.ndarray) -> np.ndarray:

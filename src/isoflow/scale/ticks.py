@@ -27,8 +27,8 @@ SPACING = 8
 
 #: calls of one stage with a counter of their own (a thread each); calls
 #: beyond share them (``call % MOST_CALLS``), since a compiled loop writes
-#: its count with no bounds check; a shared counter says less than was
-#: done, never more
+#: its count with no bounds check; a shared counter says less than the
+#: work done, never more
 MOST_CALLS = 256
 
 
