@@ -12,7 +12,7 @@ import pytest
 from conftest import ball
 
 from isoflow import analyze, label_table
-from isoflow.digital.label_table import distinct
+from isoflow.digital.label_table import distinct, image_values
 from isoflow.errors import IsoflowError
 from isoflow.scale.compiled import have_numba
 
@@ -297,17 +297,23 @@ def test_without_surfaces_the_surface_columns_are_left_out(rng):
 @pytest.mark.parametrize("dtype", [np.int8, np.int16, np.int64, np.uint8, np.uint16, np.uint64])
 def test_distinct_labels_equal_numpys_unique(rng, dtype):
     """The labels' distinct values and each one's index among them, from a
-    table over their range where it is short, are NumPy's unique: also
+    table over their range where it is short, are NumPy's unique, as are an
+    image's values read a step at a time into that table: also
     where the range spans the type's ends (a difference the type cannot
     hold) and where it is too sparse for a table."""
     info = np.iinfo(dtype)
     ends = [info.min, info.max, info.min + 2, info.max - 1, info.min, info.max - 1]
     cases = [rng.integers(info.min, info.max, size, dtype=dtype, endpoint=True) for size in (0, 7, 70_000)]
     cases += [np.array(ends[:2] * 3, dtype), np.array(ends[2:], dtype), rng.integers(0, 9, 500).astype(dtype)]
+    cases += [np.array([info.min, info.min + 3, info.min], dtype), np.array([info.max, info.max - 3], dtype)]
     for values in cases:
         want, got = np.unique(values, return_inverse=True), distinct(values)
         assert got[0].dtype == values.dtype and got[0].tolist() == want[0].tolist(), values[:4]
         assert got[1].tolist() == want[1].tolist(), values[:4]
+        # an image's values, read in steps into the same table (None where too sparse for one)
+        seen = image_values(values.reshape(1, 1, -1))
+        short = len(values) == 0 or int(values.max()) - int(values.min()) <= 4 * len(values) + 1024
+        assert (seen is not None) == short and (seen is None or seen.tolist() == want[0].tolist()), values[:4]
 
 
 def test_pandas_takes_the_columns_as_they_are(rng):
