@@ -94,7 +94,48 @@ def test_npz_metadata_that_is_valid_is_kept(tmp_path):
     assert obj.origin.tolist() == [1.0, 2.0, 3.0]
 
 
-# -------------------------------------------------- volume type by content
+@pytest.mark.parametrize("arrays", [{"volume"}, {"mask"}, {"labels"}, {"seg", "image"}])
+def test_npz_spacing_is_the_voxel_size(tmp_path, capsys, arrays):
+    """``np.savez("scan.npz", mask=m, spacing=s)``, spacing as scikit-image,
+    SimpleITK and MONAI name a voxel size: the volume was refused ("name
+    one as scan.npz:mask"), and named, or saved as ``volume``, read with
+    voxels of 1, the spacing dropped without a word. The one array beside
+    the fields is the volume, and ``spacing`` its pitch: the volume and
+    area are the voxel count and faces in those units (a box of 2x3x4
+    voxels, spacing 0.5, 2, 3: 24 voxels of 3, faces 2 x (3*4*6 + 2*4*1.5
+    + 2*3*1)); two arrays beside the fields are still refused, naming an
+    array, not a field, and the one named reads with the spacing."""
+    box = np.zeros((4, 5, 6), np.uint8)
+    box[1:3, 1:4, 1:5] = 1
+    spacing = np.array([0.5, 2.0, 3.0])
+    members = {name: box if name != "image" else np.random.default_rng(0).random(box.shape) for name in arrays}
+    path = tmp_path / "scan.npz"
+    np.savez(path, spacing=spacing, **members)
+    given = str(path) if len(arrays) == 1 else f"{path}:seg"
+    if len(arrays) > 1:
+        line = fails(capsys, "info", path, words=("holds arrays", f"name one as {path}:"))
+        assert f"{path}:spacing" not in line
+    assert main(["info", given, "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["voxels"] == 24 and report["volume"] == pytest.approx(24 * np.prod(spacing))
+    faces = 2 * (3 * 4 * spacing[1] * spacing[2] + 2 * 4 * spacing[0] * spacing[2] + 2 * 3 * spacing[0] * spacing[1])
+    assert report["surface_area"] == pytest.approx(faces)
+    assert read_volume(given).spacing.tolist() == spacing.tolist()
+    assert main(["info", given, "--labels", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["labels"][0]["volume"] == pytest.approx(24 * np.prod(spacing))
+
+
+def test_npz_spacing_refused_in_its_own_name(tmp_path, capsys):
+    """A spacing that is no voxel size is refused naming ``spacing``, as
+    the archive does; one beside a ``pitch`` that differs is refused
+    naming both; one equal to it reads."""
+    vol = np.ones((3, 3, 3), bool)
+    np.savez(tmp_path / "bad.npz", volume=vol, spacing=np.array([1.0, -1.0, 1.0]))
+    fails(capsys, "info", tmp_path / "bad.npz", words=("bad.npz: 'spacing' must be positive", "[1, -1, 1]"))
+    np.savez(tmp_path / "two.npz", volume=vol, pitch=np.array([1.0, 2.0, 3.0]), spacing=np.array([1.0, 2.0, 4.0]))
+    fails(capsys, "info", tmp_path / "two.npz", words=("two.npz: holds both 'pitch' [1, 2, 3] and 'spacing' [1, 2, 4]",))
+    np.savez(tmp_path / "same.npz", volume=vol, pitch=np.array(2.0), spacing=np.array([2.0, 2.0, 2.0]))
+    assert read_volume(tmp_path / "same.npz").pitch == 2.0
 
 def test_volume_type_comes_from_the_content_not_the_suffix(tmp_path, capsys):
     upper = tmp_path / "v.NPZ"

@@ -173,7 +173,7 @@ class DigitalObject:
             given = given.item() if given.size == 1 else given.tolist()
             raise IsoflowError(f"'parity' must be 0 (lattice) or 1 (dual lattice), got {given_text(given)}")
         object.__setattr__(self, "parity", int(parity))
-        object.__setattr__(self, "pitch", _pitch(self.pitch, n))
+        object.__setattr__(self, "pitch", checked_pitch(self.pitch, n))
         object.__setattr__(self, "unit", unit_given(self.unit, "DigitalObject"))
         object.__setattr__(self, "space", space_given(self.space, "DigitalObject"))
 
@@ -647,27 +647,53 @@ def _check_grid(lo, hi, count: int, what: str, bytes_per_voxel: int) -> None:
     )
 
 
-def _pitch(value, ndim: int):
-    """A positive float, or a vector of ``ndim`` positive floats (a
-    read-only array) when the voxels are anisotropic; a vector whose entries
-    are all equal becomes one number, so that isotropic stays a scalar."""
-    _unmasked(value, "pitch")
-    arr = as_array(value, "'pitch'")  # nested lists of uneven lengths named, not NumPy's ValueError
+def checked_pitch(value: ArrayLike, ndim: int, name: str = "pitch") -> float | np.ndarray:
+    """A voxel size as a lattice keeps it, or a one-line refusal.
+
+    Parameters
+    ----------
+    value : array_like
+        One number, or one per axis.
+    ndim : int
+        The axes.
+    name : str
+        The field as the refusals name it (a file's own word for a voxel
+        size, such as an ``.npz``'s ``spacing``).
+
+    Returns
+    -------
+    float or numpy.ndarray
+        A positive float, or a vector of ``ndim`` positive floats (a
+        read-only array) when the voxels are anisotropic; a vector whose
+        entries are all equal becomes one number, so that isotropic stays a
+        scalar.
+
+    Examples
+    --------
+    >>> checked_pitch([0.5, 0.5, 0.5], 3), checked_pitch([1, 2, 2], 3).tolist()
+    (0.5, [1.0, 2.0, 2.0])
+    >>> checked_pitch([1, -1, 1], 3, "spacing")
+    Traceback (most recent call last):
+        ...
+    isoflow.errors.IsoflowError: 'spacing' must be positive (one number, or one per axis), got [1, -1, 1]
+    """
+    _unmasked(value, name)
+    arr = as_array(value, f"'{name}'")  # nested lists of uneven lengths named, not NumPy's ValueError
     # in a voxel size's words, before _field's
-    _refuse_bools(value, arr, "pitch", "a number (one, or one per axis)")
+    _refuse_bools(value, arr, name, "a number (one, or one per axis)")
     arr = _object_numbers(arr)
     if arr.ndim == 0 and arr.dtype.kind not in "biuf":
         # one value, no number: _field's "3 numbers, one per axis" reads as if one number were not taken
-        raise IsoflowError(f"'pitch' must be a number (one, or one per axis), got {given_text(arr.item())}")
+        raise IsoflowError(f"'{name}' must be a number (one, or one per axis), got {given_text(arr.item())}")
     if arr.dtype.kind in "iuf" and not np.isfinite(arr).all():
         # named as what a voxel size must be: _field's "3 numbers, one per axis" reads as a count that is wrong
-        raise IsoflowError(f"'pitch' must be finite and positive (one number, or one per axis), got {number_text(arr)}")
+        raise IsoflowError(f"'{name}' must be finite and positive (one number, or one per axis), got {number_text(arr)}")
     if arr.dtype.kind in "biuf" and arr.size == 1 and arr.ndim <= 1:
-        pitch = _field(arr.reshape(()), "pitch", None)
+        pitch = _field(arr.reshape(()), name, None)
     else:
-        pitch = _field(value, "pitch", ndim)
+        pitch = _field(value, name, ndim)
     if not np.all(np.asarray(pitch) > 0):
-        raise IsoflowError(f"'pitch' must be positive (one number, or one per axis), got {number_text(arr)}")
+        raise IsoflowError(f"'{name}' must be positive (one number, or one per axis), got {number_text(arr)}")
     if np.ndim(pitch) == 0:
         return float(pitch)
     if np.all(pitch == pitch[0]):

@@ -6,9 +6,11 @@ per axis) and ``origin``, and ``unit``, their length unit (a string, where
 one is given), and ``space``, their anatomical frame (``"LPS"``, where one
 is known), so that it round-trips exactly, the lattice parity
 of a flow's step included, and a label image's names as ``label_names``
-(a string: JSON of label value to name); any other ``.npz`` must hold
-exactly one array (or one named ``volume``). A ``.npy`` holds the array
-alone.
+(a string: JSON of label value to name). Any other ``.npz`` must hold one
+array besides those fields (or one named ``volume``, or the one named as
+``ARCHIVE.npz:NAME``), which they describe; ``spacing``, the voxel size's
+name in scikit-image, SimpleITK and MONAI, is read as ``pitch``. A ``.npy``
+holds the array alone.
 """
 
 from __future__ import annotations
@@ -18,9 +20,16 @@ from pathlib import Path
 import numpy as np
 
 from ...digital.frames import space_given
-from ...digital.lattice import DigitalObject
+from ...digital.lattice import DigitalObject, checked_pitch
 from ...errors import IsoflowError, coordinates
 from .registry import RawVolume, content_hint, names_from_json, names_json, note, unit_field
+
+#: the arrays of an ``.npz`` that describe its volume (isoflow writes them)
+FIELDS = ("offset", "parity", "pitch", "origin", "unit", "space", "label_names")
+
+#: the voxel size's name in scikit-image, SimpleITK and MONAI: read as the
+#: pitch where the archive holds none (and refused beside one that differs)
+SPACING = "spacing"
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -33,18 +42,19 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
                 names = list(z.files)
                 if dataset is not None and dataset not in names:
                     raise IsoflowError(f"{path}: holds no array {dataset!r} (its arrays: {', '.join(names)})")
-                if dataset not in (None, "volume"):  # one array named: the array alone
-                    arr = _member(z, dataset, path)
+                volumes = [n for n in names if n not in FIELDS and n != SPACING]
+                if dataset is not None:
+                    name = dataset
                 elif "volume" in names:
-                    arr = _member(z, "volume", path)
-                    for key in ("offset", "parity", "pitch", "origin", "unit", "space", "label_names"):
-                        if key in names:
-                            meta[key] = _member(z, key, path)
-                elif len(names) == 1:
-                    arr = _member(z, names[0], path)
+                    name = "volume"
+                elif len(volumes) == 1 or len(names) == 1:
+                    name = (volumes or names)[0]
                 else:
-                    raise IsoflowError(f"{path}: holds arrays {', '.join(names)}; name one as {path}:{names[0]}, "
-                                       "or save the volume as 'volume'")
+                    raise IsoflowError(f"{path}: holds arrays {', '.join(names)}; name one as "
+                                       f"{path}:{(volumes or names)[0]}, or save the volume as 'volume'")
+                arr = _member(z, name, path)
+                if name in volumes:  # a field named as the volume is read alone
+                    meta = _fields(z, path, arr.ndim)
         elif isinstance(loaded, np.ndarray):
             if dataset is not None:
                 raise IsoflowError(f"{path}: a .npy holds one array; name none (:{dataset})")
@@ -70,6 +80,24 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     space = space_given(str(meta["space"]), f"{path}: array 'space'") if "space" in meta else None
     return RawVolume(arr, meta.get("pitch", 1.0), meta.get("origin"), meta.get("offset"), meta.get("parity", 0),
                      unit=unit, space=space, names=names)
+
+
+def _fields(archive, path: Path, ndim: int) -> dict:
+    """The fields of :data:`FIELDS` an ``.npz`` archive holds, its
+    :data:`SPACING` as the pitch (a refusal of its value names it as the
+    archive does); a spacing beside a pitch that differs refused."""
+    meta = {key: _member(archive, key, path) for key in FIELDS if key in archive.files}
+    if SPACING in archive.files:
+        spacing = _member(archive, SPACING, path)
+        try:
+            size = np.broadcast_to(checked_pitch(spacing, ndim, SPACING), ndim)
+            if "pitch" in meta and not np.array_equal(np.broadcast_to(checked_pitch(meta["pitch"], ndim), ndim), size):
+                raise IsoflowError(f"holds both 'pitch' {coordinates(meta['pitch'])} and {SPACING!r} "
+                                   f"{coordinates(spacing)}, two voxel sizes: keep one")
+        except IsoflowError as exc:
+            raise exc.at(path) from None
+        meta.setdefault("pitch", spacing)
+    return meta
 
 
 def _member(archive, name: str, path: Path) -> np.ndarray:
