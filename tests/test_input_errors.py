@@ -137,6 +137,23 @@ def test_npz_spacing_refused_in_its_own_name(tmp_path, capsys):
     np.savez(tmp_path / "same.npz", volume=vol, pitch=np.array(2.0), spacing=np.array([2.0, 2.0, 2.0]))
     assert read_volume(tmp_path / "same.npz").pitch == 2.0
 
+
+def test_npz_arrays_beside_the_volume_that_are_not_read_are_said(tmp_path, capsys):
+    """``volume`` beside an ``affine`` (or a ``voxel_size``) was read with
+    voxels of 1 from 0 without a word: one warning line names what is not
+    read; the volume named as ``ARCHIVE.npz:volume`` is read as asked,
+    without it."""
+    path = tmp_path / "scan.npz"
+    np.savez(path, volume=np.ones((3, 3, 3), bool), affine=np.diag([2.0, 2.0, 2.0, 1.0]))
+    assert main(["info", str(path), "--json"]) == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["voxels"] == 27
+    assert captured.err.strip().splitlines() == [
+        f"isoflow info: warning: {path}: its array affine is not read: the volume is 'volume', placed by its pitch "
+        "(or spacing), origin, offset and parity, where given"]
+    assert main(["info", f"{path}:volume", "--json"]) == 0
+    assert capsys.readouterr().err == ""
+
 def test_volume_type_comes_from_the_content_not_the_suffix(tmp_path, capsys):
     upper = tmp_path / "v.NPZ"
     assert main(["voxelize", str(box_stl(tmp_path)), "--resolution", "8", "-o", str(upper)]) == 0

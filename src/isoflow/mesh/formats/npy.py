@@ -55,6 +55,11 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
                 arr = _member(z, name, path)
                 if name in volumes:  # a field named as the volume is read alone
                     meta = _fields(z, path, arr.ndim)
+                unread = [n for n in volumes if n != name]
+                if dataset is None and unread:  # (an affine, a voxel_size: the volume would be placed without it)
+                    note(f"{path}: {'its array' if len(unread) == 1 else 'its arrays'} {', '.join(unread)} "
+                         f"{'is' if len(unread) == 1 else 'are'} not read: the volume is 'volume', placed by its pitch "
+                         f"(or {SPACING}), origin, offset and parity, where given")
         elif isinstance(loaded, np.ndarray):
             if dataset is not None:
                 raise IsoflowError(f"{path}: a .npy holds one array; name none (:{dataset})")
