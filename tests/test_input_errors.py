@@ -154,6 +154,9 @@ def test_npz_arrays_beside_the_volume_that_are_not_read_are_said(tmp_path, capsy
     assert main(["info", f"{path}:volume", "--json"]) == 0
     assert capsys.readouterr().err == ""
 
+
+# -------------------------------------------------- volume type by content
+
 def test_volume_type_comes_from_the_content_not_the_suffix(tmp_path, capsys):
     upper = tmp_path / "v.NPZ"
     assert main(["voxelize", str(box_stl(tmp_path)), "--resolution", "8", "-o", str(upper)]) == 0
