@@ -128,7 +128,9 @@ def test_npz_spacing_is_the_voxel_size(tmp_path, capsys, arrays):
 def test_npz_spacing_refused_in_its_own_name(tmp_path, capsys):
     """A spacing that is no voxel size is refused naming ``spacing``, as
     the archive does; one beside a ``pitch`` that differs is refused
-    naming both; one equal to it reads."""
+    naming both; one equal to it reads. A segmentation saved with a
+    channel axis, (X, Y, Z, 1), takes a spacing of its three axes in
+    space, as it takes such a pitch."""
     vol = np.ones((3, 3, 3), bool)
     np.savez(tmp_path / "bad.npz", volume=vol, spacing=np.array([1.0, -1.0, 1.0]))
     fails(capsys, "info", tmp_path / "bad.npz", words=("bad.npz: 'spacing' must be positive", "[1, -1, 1]"))
@@ -136,6 +138,8 @@ def test_npz_spacing_refused_in_its_own_name(tmp_path, capsys):
     fails(capsys, "info", tmp_path / "two.npz", words=("two.npz: holds both 'pitch' [1, 2, 3] and 'spacing' [1, 2, 4]",))
     np.savez(tmp_path / "same.npz", volume=vol, pitch=np.array(2.0), spacing=np.array([2.0, 2.0, 2.0]))
     assert read_volume(tmp_path / "same.npz").pitch == 2.0
+    np.savez(tmp_path / "channel.npz", seg=np.ones((3, 3, 3, 1), np.uint8), spacing=np.array([1.0, 2.0, 3.0]))
+    assert isoflow.read_labels(tmp_path / "channel.npz").spacing.tolist() == [1.0, 2.0, 3.0]
 
 
 def test_npz_arrays_beside_the_volume_that_are_not_read_are_said(tmp_path, capsys):

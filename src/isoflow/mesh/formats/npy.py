@@ -94,9 +94,11 @@ def _fields(archive, path: Path, ndim: int) -> dict:
     meta = {key: _member(archive, key, path) for key in FIELDS if key in archive.files}
     if SPACING in archive.files:
         spacing = _member(archive, SPACING, path)
+        # a 4D volume's (a time series', a channel axis') spacing may give its three axes in space, as its pitch may
+        axes = 3 if ndim == 4 and np.size(spacing) == 3 else ndim
         try:
-            size = np.broadcast_to(checked_pitch(spacing, ndim, SPACING), ndim)
-            if "pitch" in meta and not np.array_equal(np.broadcast_to(checked_pitch(meta["pitch"], ndim), ndim), size):
+            size = np.broadcast_to(checked_pitch(spacing, axes, SPACING), axes)
+            if "pitch" in meta and not np.array_equal(np.broadcast_to(checked_pitch(meta["pitch"], axes), axes), size):
                 raise IsoflowError(f"holds both 'pitch' {coordinates(meta['pitch'])} and {SPACING!r} "
                                    f"{coordinates(spacing)}, two voxel sizes: keep one")
         except IsoflowError as exc:
