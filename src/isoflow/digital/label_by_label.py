@@ -36,7 +36,7 @@ import numpy as np
 
 from ..scale.memory import budget_held, check_fits
 from .closed_surfaces import census_loaded, compiled_census, use_census
-from .vertex_features import A_WC, CLASSES, ENERGY, EULER, FACES, NWC, PINCH, feature_table
+from .vertex_features import A_WC, CLASSES, ENERGY, EULER, FACES, NWC, PINCH, WIDTH, feature_table
 
 if TYPE_CHECKING:
     from ..results import ClosedSurfaces
@@ -110,7 +110,7 @@ def _empty_rows(labels: np.ndarray) -> dict:
     n = len(labels)
     return {"label": labels, "voxels": np.zeros(n, np.int64), "sums": np.zeros((n, 3)),
             "lo": np.zeros((n, 3), np.int64), "hi": np.full((n, 3), -1, np.int64),
-            "features": np.zeros((n, 17), np.int64), "doubled": np.zeros(n, np.int64),
+            "features": np.zeros((n, WIDTH), np.int64), "doubled": np.zeros(n, np.int64),
             "b0": np.zeros(n, np.int64), "b2": np.zeros(n, np.int64)}
 
 
@@ -218,7 +218,7 @@ def _report_features(report: Mapping, box: np.ndarray) -> np.ndarray:
     """The feature sums of :func:`~isoflow.digital.vertex_features.feature_table`
     from a report and the (padded) box: the faces per axis counted on the
     box."""
-    out = np.zeros(17, np.int64)
+    out = np.zeros(WIDTH, np.int64)
     out[EULER] = 8 * report["euler_characteristic"]
     out[CLASSES] = report["n"]
     out[NWC] = report["non_well_composed"]

@@ -22,6 +22,8 @@ from .surface import face_slots, pinch_lut, slot_octants
 #: not well-composed, ``a`` where well-composed, the energy, the pinches,
 #: the face slots per normal axis
 EULER, CLASSES, NWC, A_WC, ENERGY, PINCH, FACES = 0, slice(1, 10), 10, 11, 12, 13, slice(14, 17)
+#: the feature table's width: a label's row of features
+WIDTH = FACES.stop
 
 
 @cache
@@ -45,7 +47,7 @@ def feature_table(connectivity: int = 6) -> np.ndarray:
     cls = class_lut()
     a = a_lut(connectivity).astype(np.int64)
     on = cls >= 0
-    out = np.zeros((256, 17), np.int64)
+    out = np.zeros((256, WIDTH), np.int64)
     out[:, EULER] = euler_lut(3, connectivity)
     out[np.flatnonzero(on), 1 + cls[on]] = 1
     out[:, NWC] = cls == NOT_WELL_COMPOSED
@@ -55,6 +57,6 @@ def feature_table(connectivity: int = 6) -> np.ndarray:
     codes = np.arange(256)
     for slot in range(12):
         lo, hi = slot_octants(slot)
-        out[:, 14 + slot // 4] += ((codes >> lo) & 1) != ((codes >> hi) & 1)
+        out[:, FACES.start + slot // 4] += ((codes >> lo) & 1) != ((codes >> hi) & 1)
     assert (out[:, FACES].sum(axis=1) == face_slots()).all()
     return out
