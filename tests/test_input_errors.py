@@ -142,6 +142,25 @@ def test_npz_spacing_refused_in_its_own_name(tmp_path, capsys):
     assert isoflow.read_labels(tmp_path / "channel.npz").spacing.tolist() == [1.0, 2.0, 3.0]
 
 
+@pytest.mark.parametrize("field", ["spacing", "pitch"])
+def test_a_time_series_placed_by_its_three_axes_in_space(tmp_path, capsys, field):
+    """A 4D 0/1 time series saved with the voxel size (and origin) of its
+    three axes in space, as a scan's spacing is, was refused ("'pitch'
+    must be 4 numbers"). The time axis steps 1 from 0, as a 4D NIfTI's
+    does (nibabel's zooms of such a file the reference), and each time
+    point is placed by the three."""
+    nib = pytest.importorskip("nibabel")
+    series = np.zeros((4, 5, 6, 3), np.uint8)
+    series[1:3, 1:4, 2:5, :] = 1
+    np.savez(tmp_path / "t.npz", volume=series, **{field: np.array([0.5, 1.0, 2.0])}, origin=np.array([1.0, 2, 3]))
+    nib.save(nib.Nifti1Image(series, np.diag([0.5, 1.0, 2.0, 1.0])), tmp_path / "t.nii")
+    assert main(["info", str(tmp_path / "t.npz"), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["pitch"] == list(nib.load(tmp_path / "t.nii").header.get_zooms()) and got["origin"] == [1, 2, 3, 0]
+    one = read_volume(tmp_path / "t.npz", time=2)
+    assert one.spacing.tolist() == [0.5, 1.0, 2.0] and one.origin.tolist() == [1.0, 2.0, 3.0]
+
+
 def test_npz_arrays_beside_the_volume_that_are_not_read_are_said(tmp_path, capsys):
     """``volume`` beside an ``affine`` (or a ``voxel_size``) was read with
     voxels of 1 from 0 without a word: one warning line names what is not

@@ -367,6 +367,8 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
     if arr.ndim not in (2, 3, 4):
         raise IsoflowError(f"{where}: a volume must be 2D, 3D or 4D, this array is {arr.ndim}D with shape {arr.shape}")
     said_of(raw, label)
+    if arr.ndim == 4:
+        raw = time_axis_placed(raw)
     if label is not None:
         vol = select_label(arr, label, where)
     elif raw.paint:
@@ -394,6 +396,36 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
         return DigitalObject(handed_over(vol), **{k: v for k, v in meta.items() if v is not None})
     except IsoflowError as exc:
         raise exc.at(where) from None
+
+
+def time_axis_placed(raw: RawVolume) -> RawVolume:
+    """A 4D volume whose pitch, origin or offset gives its three axes in
+    space alone (an ``.npz`` saved with the spacing of its scan) placed
+    along its fourth, time, axis as a 4D NIfTI's is: steps of 1 from 0.
+
+    Parameters
+    ----------
+    raw : RawVolume
+        What a reader found, of a 4D array.
+
+    Returns
+    -------
+    RawVolume
+        ``raw``, its placement's entries of three given a fourth.
+
+    Examples
+    --------
+    >>> raw = RawVolume(np.zeros((2, 3, 4, 5), np.uint8), pitch=[0.5, 0.5, 2.0], origin=[1, 2, 3])
+    >>> placed = time_axis_placed(raw)
+    >>> placed.pitch.tolist(), placed.origin.tolist(), placed.offset
+    ([0.5, 0.5, 2.0, 1.0], [1.0, 2.0, 3.0, 0.0], None)
+    """
+    def timed(value, step):
+        return np.append(np.asarray(value), step) if value is not None and np.ndim(value) == 1 and len(value) == 3 \
+            else value
+
+    return dataclasses.replace(raw, pitch=timed(raw.pitch, 1.0), origin=timed(raw.origin, 0.0),
+                               offset=timed(raw.offset, 0))
 
 
 def scaling_named(exc: NotBinary, scaling: str | None) -> NotBinary:

@@ -12,11 +12,14 @@ stores z, y, x).
 
 Metadata: isoflow writes the attributes ``pitch`` (one number, or one per
 axis), ``origin``, ``offset`` and ``parity`` on the dataset and reads them
-back, so a round trip is exact. Files from other tools: their
-``element_size_um`` attribute (ilastik and Fiji's HDF5 plug-in, one size per
-dataset axis) is read as the voxel size when ``pitch`` is absent, in µm.
-The length unit: isoflow's attribute ``unit`` (a string) where present, else
-µm where ``element_size_um`` gives the voxel size. A unit given is written
+back, so a round trip is exact. Files from other tools: the voxel size
+in their word (:mod:`~isoflow.mesh.formats.grid_attributes`: ilastik's and
+Fiji's ``element_size_um`` in µm, CREMI's and gunpowder's ``resolution``
+with ``offset`` in world units, funlib's ``voxel_size``, ``spacing``) is
+read when ``pitch`` is absent. The length unit: isoflow's attribute
+``unit`` (a string) where present, else the one the voxel size's
+attribute says (µm for ``element_size_um``). ``.hdf`` (CREMI's suffix)
+is read as HDF5. A unit given is written
 as ``unit``; and, where it is µm, ``element_size_um`` too (the pitch per
 dataset axis), for Fiji and ilastik. An anatomical frame known (a volume
 read from NIfTI, MGH or a NRRD with a space) is isoflow's attribute
@@ -47,12 +50,14 @@ import numpy as np
 from ...digital.frames import space_given
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
+from .grid_attributes import READ, attribute_grid, size_named
 from .registry import (
     RawVolume,
     check_shape,
     import_library,
     names_from_json,
     names_json,
+    note,
     reading,
     stored_values,
     unit_field,
@@ -72,7 +77,10 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     h5py = import_library("h5py", "HDF5")
     where = str(path) if dataset is None else f"{path}:{dataset}"
     with reading(path, "HDF5"), h5py.File(path, "r") as f:
-        ds = f[_choose(f, h5py, path, dataset)]
+        chosen = _choose(f, h5py, path, dataset)
+        ds = f[chosen]
+        # beside the volume, a dataset that holds a voxel size is not read as this one's
+        beside = size_named((n for n in _datasets(f, h5py)[0] if n != chosen.strip("/")), attributes=False)
         attrs = dict(ds.attrs)
         stored = ds.shape
         index, kept = tagged_axes(attrs.get("axistags"), stored, where)
@@ -80,21 +88,23 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         array = ds[index] if index else ds[()]
     # the axes read are in stored order: turned to the order the tags give them (x, y, z, t)
     array = np.transpose(array, [sorted(kept).index(i) for i in kept])
-    pitch = attrs.get("pitch", attrs.get("element_size_um", 1.0))
-    if "pitch" not in attrs and "element_size_um" in attrs:
-        if index and np.ndim(pitch) == 1 and len(pitch) == len(stored):  # one per stored axis: those read
-            pitch = np.asarray(pitch)[kept]
-        elif index and np.ndim(pitch) == 1 and len(pitch) == len(kept):  # one per axis read, in stored order
-            pitch = np.asarray(pitch)[[sorted(kept).index(i) for i in kept]]
-        pitch = _element_size(pitch, np.ndim(array), where)
-    offset = attrs.get("offset")
-    # element_size_um is in micrometres by its name; isoflow's own pitch has its unit beside it, if any
-    unit = "\u00b5m" if "pitch" not in attrs and "element_size_um" in attrs else None
+    # another tool's voxel size (ilastik's element_size_um, CREMI's resolution, ...), per stored axis
+    grid = attribute_grid(attrs, stored, kept, where)
+    if grid is None and "pitch" not in attrs and beside:
+        note(f"{where}: {'the dataset' if len(beside) == 1 else 'the datasets'} {', '.join('/' + n for n in beside)} "
+             f"beside it {'is' if len(beside) == 1 else 'are'} not read: voxels of 1 (isoflow reads the voxel "
+             f"size from the dataset's attributes {READ})")
+    if grid is None:  # isoflow's own attributes, or none
+        pitch, origin, offset, unit = attrs.get("pitch", 1.0), attrs.get("origin"), attrs.get("offset"), None
+    else:
+        pitch, unit = grid.pitch, grid.unit
+        origin = attrs.get("origin") if grid.origin is None else grid.origin
+        offset = attrs.get("offset") if grid.lattice_offset else None
     if "unit" in attrs:
         unit = unit_field(attrs["unit"], f"{where}: attribute 'unit'")
     names = names_from_json(attrs["label_names"], where, "attribute 'label_names'") if "label_names" in attrs else None
     space = space_given(str(attrs["space"]), f"{where}: attribute 'space'") if "space" in attrs else None
-    return RawVolume(np.asarray(array), pitch, attrs.get("origin"), offset, attrs.get("parity", 0), unit=unit,
+    return RawVolume(np.asarray(array), pitch, origin, offset, attrs.get("parity", 0), unit=unit,
                      space=space, names=names)
 
 
@@ -166,21 +176,6 @@ def tagged_axes(tags: object, shape: tuple[int, ...], where: str) -> tuple[tuple
     else:  # axes the tags do not name as x, y, z: as stored, a time axis last
         kept = [i for i in kept if i not in times] + times
     return index, kept
-
-
-def _element_size(value, ndim: int, where: str) -> np.ndarray:
-    """The voxel size from Fiji's ``element_size_um`` (one per axis, or one
-    number), or one line naming that attribute (not isoflow's word for it,
-    'pitch')."""
-    try:
-        size = np.asarray(value, np.float64)
-    except (TypeError, ValueError):
-        size = None
-    if size is None or size.shape not in ((), (ndim,)) or not (np.isfinite(size).all() and (size > 0).all()):
-        shown = value.tolist() if isinstance(value, np.ndarray) else value
-        raise IsoflowError(f"{where}: attribute 'element_size_um' {shown!r} is not {ndim} positive voxel sizes, "
-                           "one per axis of the dataset (or one for all)")
-    return size
 
 
 def _choose(f, h5py, path, dataset) -> str:

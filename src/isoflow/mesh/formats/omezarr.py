@@ -19,7 +19,9 @@ name), axes as its zarr v3 ``dimension_names`` name them where they are x,
 y, z in some order (z, y, x as xarray writes them;
 :func:`~isoflow.scale.chunks.named_axes`), else as stored (axis 0 is x);
 placed by its ``pitch`` and ``origin`` attributes (one entry per stored
-axis) where it has both.
+axis; each where given), else by the voxel size and offset another tool
+wrote (:func:`plain_placement`: gunpowder's ``resolution``, funlib's
+``voxel_size``, ...).
 
 ``isoflow info`` reads a zarr store block by block (:func:`analyze_store`);
 the other commands read the level into memory, refused up front when it
@@ -63,6 +65,7 @@ from ...scale.chunks import (
     stored_order_said,
     unwritten_fill,
 )
+from .grid_attributes import attribute_grid
 from .registry import (
     HOLD_4D,
     UDUNITS,
@@ -185,19 +188,9 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
         stored_order_said(array, where)
         data = data if time is None else data[..., 0]
         data = np.transpose(data, plain) if data.ndim == len(plain) else data
-        # a plain array may keep its grid in the attributes ``pitch`` and
-        # ``origin``, an entry per stored axis (as isoflow's slab voxeliser
-        # once wrote them), turned to x, y, z as the axes are
-        attrs = dict(getattr(array, "attrs", {}) or {})
-        if "pitch" in attrs and "origin" in attrs:
-            try:
-                pitch, origin = (stored_axes_value(np.asarray(attrs[k], np.float64), plain) for k in ("pitch", "origin"))
-            except (TypeError, ValueError):
-                raise IsoflowError(f"{where}: the attributes pitch {attrs['pitch']!r} and origin "
-                                   f"{attrs['origin']!r} are not numbers") from None
-            return RawVolume(data, *(v if time is None or not v.ndim else v[:3] for v in (pitch, origin)), fill=fill,
-                             unwritten=blank)
-        return RawVolume(data, fill=fill, unwritten=blank)
+        pitch, origin, unit = plain_placement(array, plain, where)
+        pitch, origin = (v if time is None or np.ndim(v) != 1 else v[:3] for v in (pitch, origin))
+        return RawVolume(data, 1.0 if pitch is None else pitch, origin, fill=fill, unwritten=blank, unit=unit)
     xyz, _ = spatial_axes(names, data.shape, where, time=True)
     scale, shift = placement_of(multiscale, level, data.ndim, where, xyz)
     factors, unit = axis_unit(multiscale, xyz, where)
@@ -346,24 +339,21 @@ class StoreArray:
     def placement(self) -> tuple[np.ndarray | None, np.ndarray | None]:
         """``(pitch, origin)`` in x, y, z order: the OME-Zarr level's scale
         and translation (voxel centres, so the origin is half a voxel
-        lower), a plain array's ``pitch`` and ``origin`` attributes (as
-        isoflow writes them), else ``(None, None)``."""
+        lower), a plain array's by its attributes (:func:`plain_placement`;
+        each None where they give none)."""
         if self.multiscale is None:
-            attrs = dict(getattr(self.array, "attrs", {}) or {})
-            if "pitch" in attrs and "origin" in attrs:
-                return tuple(self._own_axes(np.asarray(attrs[k], np.float64)) for k in ("pitch", "origin"))  # type: ignore[return-value]
-            return None, None
+            return self.plain[0], self.plain[1]
         scale, shift = placement_of(self.multiscale, self.dataset, self.array.ndim, self.where, self.xyz)
         factors = self.units[0]
         if len(self.xyz) == 4:  # (a time axis: its step as it is)
             factors = np.append(factors, 1.0)
         return scale[self.xyz] * factors, (shift[self.xyz] - scale[self.xyz] / 2) * factors
 
-    def _own_axes(self, value: np.ndarray) -> np.ndarray:
-        """A plain array's attribute of one entry per stored axis, of the
-        x, y, z axes alone (a channel axis read at 0 has none)
-        (:func:`stored_axes_value`)."""
-        return stored_axes_value(value, self.xyz, self.array.ndim)
+    @functools.cached_property
+    def plain(self) -> tuple[Any, Any, str | None]:
+        """A plain array's :func:`plain_placement` (read, and any warning
+        given, once)."""
+        return plain_placement(self.array, self.xyz, self.where)
 
     def unit(self) -> str | None:
         """The length unit of the placement (:func:`axis_unit`)."""
@@ -371,7 +361,10 @@ class StoreArray:
 
     @functools.cached_property
     def units(self) -> tuple[np.ndarray, str | None]:
-        """:func:`axis_unit` of the store's axes, read (and any warning given) once."""
+        """:func:`axis_unit` of the store's axes (a plain array's unit: that
+        of :func:`plain_placement`), read (and any warning given) once."""
+        if self.multiscale is None:
+            return np.ones(min(len(self.xyz), 3)), self.plain[2]
         return axis_unit(self.multiscale, self.xyz, self.where)
 
 
@@ -392,6 +385,52 @@ def stored_axes_value(value: Any, xyz: list[int], ndim: int | None = None) -> An
     if np.ndim(value) != 1 or len(value) != (len(xyz) if ndim is None else ndim):
         return value
     return value[xyz] if isinstance(value, np.ndarray) else [value[i] for i in xyz]
+
+
+def plain_placement(array: Any, xyz: list[int], where: str) -> tuple[Any, Any, str | None]:
+    """A plain zarr array's ``pitch`` and ``origin`` in isoflow's order
+    (each None where its attributes give none) and their length unit:
+    isoflow's attributes ``pitch`` and ``origin`` (each an entry per stored
+    axis, or one number), else the voxel size and offset another tool
+    wrote (:func:`~isoflow.mesh.formats.grid_attributes.attribute_grid`:
+    gunpowder's and daisy's ``resolution``, funlib's ``voxel_size``, ...).
+
+    Parameters
+    ----------
+    array : zarr.Array
+        The plain array (no ``multiscales`` above it).
+    xyz : list of int
+        The stored axes read, in isoflow's order (:class:`StoreArray`).
+    where : str
+        The store, as refusals name it.
+
+    Returns
+    -------
+    tuple
+        ``(pitch, origin, unit)``.
+
+    Examples
+    --------
+    >>> import zarr
+    >>> z = zarr.create_array({}, shape=(4, 5, 6), dtype="u1")
+    >>> z.attrs.update(resolution=[40, 4, 4], offset=[80, 0, 0])
+    >>> pitch, origin, unit = plain_placement(z, [0, 1, 2], "a.zarr")
+    >>> pitch.tolist(), origin.tolist(), unit
+    ([40.0, 4.0, 4.0], [80.0, 0.0, 0.0], None)
+    """
+    attrs = dict(getattr(array, "attrs", {}) or {})
+    grid = attribute_grid(attrs, tuple(array.shape), xyz, where)
+    try:
+        if grid is not None:
+            origin = grid.origin if grid.origin is not None or "origin" not in attrs else \
+                stored_axes_value(np.asarray(attrs["origin"], np.float64), xyz, array.ndim)
+            return grid.pitch, origin, grid.unit
+        pitch, origin = (stored_axes_value(np.asarray(attrs[k], np.float64), xyz, array.ndim) if k in attrs else None
+                         for k in ("pitch", "origin"))
+    except (TypeError, ValueError):
+        raise IsoflowError(f"{where}: the attributes pitch {attrs.get('pitch')!r} and origin "
+                           f"{attrs.get('origin')!r} are not numbers") from None
+    return pitch, origin, None
 
 
 def open_store(path: str | os.PathLike, time: bool = False, channel: bool = False) -> StoreArray:
@@ -923,12 +962,8 @@ class LabelSlabs:
         import_library("zarr", "OME-Zarr")
         store = open_store(path, time=True)
         array, self.where = store.array, store.where
-        if store.multiscale is None:
-            attrs = dict(getattr(array, "attrs", {}) or {})
-            pitch, origin = (stored_axes_value(attrs.get(k, v), store.xyz, array.ndim)
-                             for k, v in (("pitch", 1.0), ("origin", None)))
-        else:
-            pitch, origin = store.placement()
+        pitch, origin = store.placement()
+        pitch = 1.0 if pitch is None else pitch
         xyz, other = store.xyz, store.other
         if store.multiscale is None and array.ndim == 4 and array.shape[3] == 1:
             # a 3D label image saved with a last axis of one entry (an array

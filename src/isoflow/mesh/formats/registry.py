@@ -101,8 +101,9 @@ FORMATS = (
     # the file is built in memory (HDF5's core driver) and copied out whole: its gzip stream is held two to
     # three times, as the image grows and as its copy; a random mask's bytes shrink to a sixth, random
     # labels' not at all
-    VolumeFormat("HDF5", (".h5", ".hdf5", ".he5"), "hdf5", "h5py", datasets=True, write_bytes=0.6,
-                 label_bytes=2.5, names_in=(".h5", ".hdf5", ".he5")),
+    # .hdf: CREMI's files (HDF5, though HDF4 used the suffix too: h5py says which)
+    VolumeFormat("HDF5", (".h5", ".hdf5", ".he5", ".hdf"), "hdf5", "h5py", datasets=True, write_bytes=0.6,
+                 label_bytes=2.5, names_in=(".h5", ".hdf5", ".he5", ".hdf")),
     # a bit per voxel; run-length coded a slab at a time
     VolumeFormat("binvox", (".binvox",), "binvox", None, max_label=1, ndims=(3,)),
     # colour indices; its voxels are listed by their coordinates (at most 256 a side), built a slab at a time
@@ -125,7 +126,7 @@ def volume_suffixes(writable: bool = False) -> tuple[str, ...]:
 
 #: the files in which ``FILE:NAME`` names a dataset, an array, a level or
 #: a layer (of a 3D Slicer segmentation)
-_CONTAINERS = ("h5", "hdf5", "he5", "npz", "zarr", "nrrd", "nhdr")
+_CONTAINERS = ("h5", "hdf5", "he5", "hdf", "npz", "zarr", "nrrd", "nhdr")
 
 
 def split_dataset(path) -> tuple[Path, str | None]:
@@ -168,6 +169,10 @@ MAGIC = (
     (b"VOX ", "MagicaVoxel", ".vox"),
     (b"\x89PNG\r\n\x1a\n", "PNG", ".png"),
 )
+
+#: HDF4's first bytes: a ``.hdf`` may hold HDF4 (HDF5's predecessor, of
+#: satellite and older microscope data), which h5py does not read
+HDF4 = b"\x0e\x03\x13\x01"
 
 
 def sniff_volume_format(path) -> tuple[str, str] | None:
@@ -257,7 +262,7 @@ def content_hint(path, what: str) -> str:
     found = sniff_volume_format(path)
     name = Path(path).name
     if found is None:
-        return ""
+        return _hdf4_hint(path) if what == "HDF5" else ""
     if found[0] == what:
         packed = found[1] in (".nii.gz", ".mgz")
         if what not in ("NIfTI", "MGH") or packed == name.lower().endswith((".gz", ".mgz")):
@@ -270,6 +275,17 @@ def content_hint(path, what: str) -> str:
     if fmt is not None:  # the suffix the name has, as format_for matched it
         stem = name[: -max(len(s) for s in fmt.suffixes if name.lower().endswith(s))]
     return f"; its content is {content}: rename it {stem}{found[1]}"
+
+
+def _hdf4_hint(path) -> str:
+    """What to add to a refusal of an HDF4 file read as HDF5: how to
+    convert it; nothing for any other content."""
+    try:
+        with open(path, "rb") as fh:
+            hdf4 = fh.read(len(HDF4)) == HDF4
+    except OSError:
+        return ""
+    return "; its content is HDF4, not HDF5: convert it with the HDF Group's h4toh5" if hdf4 else ""
 
 
 def import_library(module: str, fmt: str, package: str | None = None):
