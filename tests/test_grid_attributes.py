@@ -202,3 +202,62 @@ def test_a_time_series_takes_a_voxel_size_of_its_three_axes(tmp_path):
     one = isoflow.read_volume(given, label=9, time=1)
     assert np.allclose(one.spacing, RESOLUTION) and np.allclose(one.origin, OFFSET)
     assert np.isclose(one.volume.sum() * np.prod(one.spacing), expected(labels(), 9)["volume"])
+
+
+def bar_zyx() -> np.ndarray:
+    """A bar along stored axis 0, which funlib's names call z."""
+    zyx = np.zeros((9, 4, 5), np.uint8)
+    zyx[1:8, 1:3, 2:4] = 1
+    return zyx
+
+
+def named_truth(zyx: np.ndarray, size_zyx, offset_zyx) -> np.ndarray:
+    """The bar's box by its names: the array transposed to x, y, z, placed
+    by the sizes and offset of those axes."""
+    cells = np.argwhere(zyx.T)
+    size, offset = np.asarray(size_zyx, float)[::-1], np.asarray(offset_zyx, float)[::-1]
+    return np.concatenate([offset + cells.min(0) * size, offset + (cells.max(0) + 1) * size])
+
+
+def test_funlib_axis_names_place_a_zarr_array_by_name(tmp_path):
+    """funlib.persistence writes ``axis_names`` z, y, x beside
+    ``voxel_size`` and ``offset`` (all in that order). The array was read
+    as stored, its z as x: the box and surface the mirror image of the
+    volume the names describe. It is read by its names, in memory and
+    block by block (odd chunks), as zarr v3's ``dimension_names`` are."""
+    zarr = pytest.importorskip("zarr")
+    pytest.importorskip("dask")
+    zyx = bar_zyx()
+    z = zarr.create_array(str(tmp_path / "f.zarr"), data=zyx, chunks=(4, 3, 2))
+    z.attrs.update(axis_names=["z", "y", "x"], voxel_size=[40, 4, 4], offset=[80, 8, 12], units=["nm", "nm", "nm"])
+    box = named_truth(zyx, [40, 4, 4], [80, 8, 12])
+    assert box[5] - box[2] == 7 * 40  # the bar runs along z
+    mask = isoflow_here("info", tmp_path / "f.zarr", "--json")
+    table = isoflow_here("info", tmp_path / "f.zarr", "--labels", "--json")
+    assert mask.returncode == table.returncode == 0, mask.stderr + table.stderr
+    assert mask.stderr == table.stderr == ""
+    got = json.loads(mask.stdout)
+    assert got["unit"] == "nm" and got["shape"] == [5, 4, 9] and np.allclose(got["bbox"], box)
+    assert np.allclose([row_of(json.loads(table.stdout), 1)[f"bbox-{i}"] for i in range(6)], box)
+    made = isoflow_here("surface", tmp_path / "f.zarr", "-o", tmp_path / "bar.ply")
+    assert made.returncode == 0, made.stderr
+    assert np.allclose(trimesh.load(tmp_path / "bar.ply", process=False).bounds, box.reshape(2, 3))
+
+
+def test_funlib_axis_names_place_an_hdf5_dataset_by_name(tmp_path, capsys):
+    """The same in HDF5, with funlib's channel axis of one entry (``c^``)
+    first and a voxel size of the three axes in space: the channel is
+    dropped, as ilastik's ``c`` is; one of several entries is refused by
+    name."""
+    zyx = bar_zyx()
+    with h5py.File(tmp_path / "f.h5", "w") as f:
+        ds = f.create_dataset("pred", data=zyx[None])
+        ds.attrs.update({"axis_names": ["c^", "z", "y", "x"], "voxel_size": [40, 4, 4], "offset": [80, 8, 12]})
+        many = f.create_dataset("many", data=np.stack([zyx, zyx]))
+        many.attrs.update({"axis_names": ["c^", "z", "y", "x"], "voxel_size": [40, 4, 4]})
+    done = isoflow_here("info", f"{tmp_path / 'f.h5'}:/pred", "--json")
+    assert done.returncode == 0, done.stderr
+    got = json.loads(done.stdout)
+    assert got["shape"] == [5, 4, 9] and np.allclose(got["bbox"], named_truth(zyx, [40, 4, 4], [80, 8, 12]))
+    fails(capsys, "info", f"{tmp_path / 'f.h5'}:/many", words=("f.h5:/many: axis 'c' has 2 entries",
+                                                                 "(axis_names czyx, shape (2, 9, 4, 5))"))

@@ -753,15 +753,60 @@ def fourth_axis_name(path: str | os.PathLike) -> str | None:
 
 def _dimension_names(array: Any) -> list[str]:
     """A zarr v3 array's ``dimension_names``, lower case (a missing one
-    ``'none'``); none for an array without them (zarr v2 has none)."""
+    ``'none'``), else the ``axis_names`` attribute funlib.persistence
+    writes (zarr v2 too; :func:`axis_names_given`); none for an array
+    without either."""
+    return _names_field(array)[1]
+
+
+def _names_field(array: Any) -> tuple[str, list[str]]:
+    """The field that names a plain zarr array's axes and its names (see
+    :func:`_dimension_names`)."""
     names = getattr(getattr(array, "metadata", None), "dimension_names", None)
-    return [str(n).lower() for n in names or ()]
+    if names:
+        return "dimension_names", [str(n).lower() for n in names]
+    given = axis_names_given(dict(getattr(array, "attrs", {}) or {}).get("axis_names"), array.ndim)
+    return ("axis_names", given) if given else ("dimension_names", [])
+
+
+def axis_names_given(value: Any, ndim: int) -> list[str] | None:
+    """The axes' names that funlib.persistence writes as the attribute
+    ``axis_names`` of an HDF5 dataset or a zarr array (``["z", "y",
+    "x"]``; a name ending in ``^``, its mark of an axis not in space, is a
+    channel, ``c``), lower case; None where the attribute is absent or is
+    not one name per axis.
+
+    Parameters
+    ----------
+    value : object
+        The attribute (a list of strings, h5py's array of them or of bytes),
+        or None.
+    ndim : int
+        The array's axes.
+
+    Returns
+    -------
+    list of str or None
+
+    Examples
+    --------
+    >>> axis_names_given(["c^", "Z", "y", "x"], 4)
+    ['c', 'z', 'y', 'x']
+    >>> axis_names_given(["z", "y"], 3) is None
+    True
+    """
+    if value is None or isinstance(value, (str, bytes)) or np.ndim(value) != 1 or len(value) != ndim:
+        return None
+    names = [(n.decode("utf-8", "replace") if isinstance(n, bytes) else str(n)).strip().lower() for n in value]
+    return ["c" if n.endswith("^") else n for n in names]
 
 
 def named_axes(array: Any) -> list[int] | None:
     """The stored axes of x, y and z (x and y in 2D) of a plain zarr v3
-    array whose ``dimension_names`` name them, in any order and any case
-    (z, y, x as xarray and tensorstore write them): such an array is read
+    array whose ``dimension_names`` name them (or a zarr array whose
+    ``axis_names`` attribute does, as funlib.persistence writes it), in
+    any order and any case (z, y, x as xarray, tensorstore and funlib
+    write them): such an array is read
     by its names, as an OME-Zarr image is by its axes. None where the
     names are anything else (none, a channel or time axis among them, a
     name twice), and the array is read as stored.
@@ -824,15 +869,15 @@ def stored_order_said(array, where: str) -> str | None:
     """
     if named_axes(array) is not None:
         return None
-    names = _dimension_names(array)
+    field, names = _names_field(array)
     spatial = ("x", "y", "z")
     if len(names) != array.ndim or not any(n in spatial and n != a for n, a in zip(names, "xyzt")):
         return None
     read_as = ", ".join(f"{n} as {a}" for n, a in zip(names, "xyzt") if n != a and n in spatial)
-    text = (f"{where}: its dimension_names are {', '.join(names)}, and a plain zarr array is read by them only "
+    text = (f"{where}: its {field} are {', '.join(names)}, and a plain zarr array is read by them only "
             f"where they are x, y, z in some order; this one is read as stored (axis 0 as x, 1 as y, 2 as z): "
             f"{read_as}, the mirror image of the volume the names describe (its coordinates and surface with those "
-            "axes swapped; counts and topology unchanged); save it with dimension_names x, y, z, or as OME-Zarr, "
+            f"axes swapped; counts and topology unchanged); save it with {field} x, y, z, or as OME-Zarr, "
             "whose axes are read by name")
     warn(text)
     return text

@@ -6,9 +6,10 @@ named ``volume``, or one of 2 to 4 axes beside datasets of fewer (a name,
 a voxel size); otherwise the error lists the datasets to choose from
 (a dataset an external link names among them). A dataset whose axes
 vigra's ``axistags`` attribute names (ilastik's exports) is read by them
-(:func:`tagged_axes`): a channel axis of one entry dropped, of several
-refused, and the spatial axes turned to the x, y, z the tags name (ilastik
-stores z, y, x).
+(:func:`tagged_axes`), as is one whose axes funlib.persistence's
+``axis_names`` names (:func:`axes_by_name`): a channel axis of one entry
+dropped, of several refused, and the spatial axes turned to the x, y, z
+the names give (ilastik and funlib store z, y, x).
 
 Metadata: isoflow writes the attributes ``pitch`` (one number, or one per
 axis), ``origin``, ``offset`` and ``parity`` on the dataset and reads them
@@ -50,6 +51,7 @@ import numpy as np
 from ...digital.frames import space_given
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
+from ...scale.chunks import axis_names_given
 from .grid_attributes import READ, attribute_grid, size_named
 from .registry import (
     RawVolume,
@@ -83,7 +85,9 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         beside = size_named((n for n in _datasets(f, h5py)[0] if n != chosen.strip("/")), attributes=False)
         attrs = dict(ds.attrs)
         stored = ds.shape
-        index, kept = tagged_axes(attrs.get("axistags"), stored, where)
+        # the axes by their names: ilastik's axistags, else funlib's axis_names
+        index, kept = (tagged_axes(attrs["axistags"], stored, where) if "axistags" in attrs else
+                       axes_by_name(axis_names_given(attrs.get("axis_names"), len(stored)), stored, where, "axis_names"))
         check_shape([stored[i] for i in kept], ds.dtype, where)
         array = ds[index] if index else ds[()]
     # the axes read are in stored order: turned to the order the tags give them (x, y, z, t)
@@ -157,9 +161,43 @@ def tagged_axes(tags: object, shape: tuple[int, ...], where: str) -> tuple[tuple
         keys = [str(a["key"]).lower() for a in axes]
     except (TypeError, ValueError, KeyError, AttributeError, UnicodeDecodeError):
         keys = None
-    if tags is None or keys is None or len(keys) != len(shape):
+    return axes_by_name(None if tags is None else keys, shape, where, "axistags")
+
+
+def axes_by_name(keys: list[str] | None, shape: tuple[int, ...], where: str,
+                 field: str) -> tuple[tuple, list[int]]:
+    """How to read a dataset whose axes ``keys`` names (vigra's
+    ``axistags``' keys, funlib's ``axis_names``): as :func:`tagged_axes`
+    says, ``field`` the attribute as refusals name it.
+
+    Parameters
+    ----------
+    keys : list of str or None
+        One lower-case name per stored axis (``x``, ``y``, ``z``, ``c``,
+        ``t``, or others), or None for none.
+    shape : tuple of int
+        The dataset's shape.
+    where : str
+        The dataset, as refusals name it.
+    field : str
+        The attribute that gave the names.
+
+    Returns
+    -------
+    index : tuple
+        What to read the dataset by (``()``: the whole as stored).
+    kept : list of int
+        The stored axes read, in isoflow's order.
+
+    Examples
+    --------
+    >>> axes_by_name(["c", "z", "y", "x"], (1, 8, 7, 6), "a.h5", "axis_names")
+    ((0, slice(None, None, None), slice(None, None, None), slice(None, None, None)), [3, 2, 1])
+    """
+    if keys is None or len(keys) != len(shape):
         return (), list(range(len(shape)))
-    stated = f"(axistags {''.join(keys)}, shape {tuple(int(n) for n in shape)})"
+    stated = f"({field} {''.join(keys) if all(len(k) == 1 for k in keys) else ', '.join(keys)}, " \
+             f"shape {tuple(int(n) for n in shape)})"
     for key, n in zip(keys, shape):
         if key == "c" and n > 1:
             raise IsoflowError(f"{where}: axis 'c' has {n} entries {stated}; isoflow reads one volume: save one "
