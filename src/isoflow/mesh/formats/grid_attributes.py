@@ -45,10 +45,12 @@ VOXEL_SIZES: dict[str, tuple[str | None, bool]] = {
     "spacing": (None, False),
 }
 
-#: words in an attribute's name that say it holds a voxel size or a
-#: placement isoflow does not read (N5's ``pixelResolution``, COSEM's
-#: ``transform``): named in a warning where no voxel size is read
-SIZE_WORDS = ("resolution", "voxel", "spacing", "pixelsize", "pixel_size", "scale", "transform", "affine")
+#: words in an attribute's name (lower case, without ``_`` and ``-``)
+#: that say it holds a voxel size or a placement isoflow does not read
+#: (N5's ``pixelResolution``, COSEM's ``transform``, ``element_size_nm``):
+#: named in a warning where no voxel size is read. Not ``scale``, which
+#: netCDF's ``scale_factor`` (of the values) holds
+SIZE_WORDS = ("resolution", "voxelsize", "voxelspacing", "spacing", "pixelsize", "elementsize", "transform", "affine")
 
 
 #: the attributes read as the voxel size, as warnings list them
@@ -63,13 +65,14 @@ def size_named(names: Iterable[object], attributes: bool = True) -> list[str]:
 
     Examples
     --------
-    >>> size_named(["axistags", "pixelResolution", "resolution", "transform", "drange"])
-    ['pixelResolution', 'transform']
+    >>> size_named(["axistags", "pixelResolution", "resolution", "transform", "scale_factor", "voxel_size_nm"])
+    ['pixelResolution', 'transform', 'voxel_size_nm']
     >>> size_named(["data/image", "spacing"], attributes=False)
     ['spacing']
     """
     read = {"pitch", *VOXEL_SIZES} if attributes else set()
-    return [str(n) for n in names if str(n) not in read and any(w in str(n).lower() for w in SIZE_WORDS)]
+    return [str(n) for n in names if str(n) not in read
+            and any(w in str(n).lower().replace("_", "").replace("-", "") for w in SIZE_WORDS)]
 
 
 @dataclass(frozen=True)

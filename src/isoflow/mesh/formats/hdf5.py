@@ -52,7 +52,7 @@ from ...digital.frames import space_given
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from ...scale.chunks import axis_names_given
-from .grid_attributes import READ, attribute_grid, size_named
+from .grid_attributes import READ, VOXEL_SIZES, attribute_grid, size_named
 from .registry import (
     RawVolume,
     check_shape,
@@ -81,9 +81,11 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     with reading(path, "HDF5"), h5py.File(path, "r") as f:
         chosen = _choose(f, h5py, path, dataset)
         ds = f[chosen]
-        # beside the volume, a dataset that holds a voxel size is not read as this one's
-        beside = size_named((n for n in _datasets(f, h5py)[0] if n != chosen.strip("/")), attributes=False)
         attrs = dict(ds.attrs)
+        # beside a volume placed by no attribute, a dataset that holds a voxel size is not read as its own
+        unplaced = "pitch" not in attrs and not any(name in attrs for name in VOXEL_SIZES)
+        beside = size_named((n for n in _datasets(f, h5py)[0] if n != chosen.strip("/")),
+                            attributes=False) if unplaced else []
         stored = ds.shape
         # the axes by their names: ilastik's axistags, else funlib's axis_names
         index, kept = (tagged_axes(attrs["axistags"], stored, where) if "axistags" in attrs else
@@ -94,7 +96,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     array = np.transpose(array, [sorted(kept).index(i) for i in kept])
     # another tool's voxel size (ilastik's element_size_um, CREMI's resolution, ...), per stored axis
     grid = attribute_grid(attrs, stored, kept, where)
-    if grid is None and "pitch" not in attrs and beside:
+    if beside:
         note(f"{where}: {'the dataset' if len(beside) == 1 else 'the datasets'} {', '.join('/' + n for n in beside)} "
              f"beside it {'is' if len(beside) == 1 else 'are'} not read: voxels of 1 (isoflow reads the voxel "
              f"size from the dataset's attributes {READ})")

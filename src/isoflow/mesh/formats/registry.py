@@ -101,7 +101,7 @@ FORMATS = (
     # the file is built in memory (HDF5's core driver) and copied out whole: its gzip stream is held two to
     # three times, as the image grows and as its copy; a random mask's bytes shrink to a sixth, random
     # labels' not at all
-    # .hdf: CREMI's files (HDF5, though HDF4 used the suffix too: h5py says which)
+    # .hdf: CREMI's files (HDF5; HDF4 used the suffix too, and a refusal of such a file names it)
     VolumeFormat("HDF5", (".h5", ".hdf5", ".he5", ".hdf"), "hdf5", "h5py", datasets=True, write_bytes=0.6,
                  label_bytes=2.5, names_in=(".h5", ".hdf5", ".he5", ".hdf")),
     # a bit per voxel; run-length coded a slab at a time
