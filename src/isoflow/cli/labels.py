@@ -272,7 +272,8 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     # info reads a 3D store block by block; a 2D one, and every store whose
     # surfaces are written, whole (as a file is, refused up front where it
     # would not fit)
-    blocks = is_store(args.input) and getattr(args, "command", "") != "surface" and stored_ndim(args.input) != 2
+    blocks = getattr(args, "command", "") != "surface" and (
+        (is_store(args.input) and stored_ndim(args.input) != 2) or in_hdf5_slabs(args.input))
     given = given_names(args)
     say_declared_labels(args)
     image = None if blocks else read_labels(args.input)
@@ -446,21 +447,39 @@ def is_store(path) -> bool:
     return split_dataset(path)[0].suffix.lower() == ".zarr"
 
 
+def in_hdf5_slabs(path: str) -> bool:
+    """Whether the input is an HDF5 label image whose table is read a slab
+    at a time: one of three axes that would not fit in memory whole (one
+    that fits is read whole, the sooner).
+
+    Examples
+    --------
+    >>> in_hdf5_slabs("seg.nii.gz")  # no HDF5 file: not opened
+    False
+    """
+    from ..mesh.formats import hdf5
+    from ..mesh.formats.registry import format_for, split_dataset
+
+    fmt = format_for(split_dataset(path)[0])
+    return fmt is not None and fmt.name == "HDF5" and not hdf5.fits_whole(path)
+
+
 def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, given: dict[int, str] | None = None,
                    background: bool = False):
-    """The table of a zarr store, one layer of blocks at a time (never the
-    whole image in memory), with a progress bar; the image as read (its
-    shape, type and placement, no array); ``given``, the names of
-    ``--names``, over the store's own; ``background``, with ``asked``
-    None, the row of label 0 too."""
+    """The table of a zarr store (or an HDF5 dataset that would not fit
+    in memory), one layer of blocks at a time (never the whole image in
+    memory), with a progress bar; the image as read (its shape, type and
+    placement, no array); ``given``, the names of ``--names``, over the
+    store's own; ``background``, with ``asked`` None, the row of label 0
+    too."""
     from ..digital.label_blocks import grouped_layers, label_table_blocks
     from ..digital.label_table import label_dtype, with_names
     from ..digital.lattice import DigitalObject
-    from ..mesh.formats.omezarr import LabelSlabs
+    from ..mesh.formats import hdf5, omezarr
     from ..scale.compiled import using
     from .progress import progress_bar
 
-    slabs = LabelSlabs(args.input)
+    slabs = omezarr.LabelSlabs(args.input) if is_store(args.input) else hdf5.LabelSlabs(args.input)
     try:
         place = DigitalObject.placement(3, pitch=slabs.pitch, origin=slabs.origin)
     except IsoflowError as exc:
@@ -479,7 +498,8 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, g
     # a float store's labels are int64, as a float file's are read (read_labels): the same --json
     kind = label_dtype(slabs.dtype) if np.dtype(slabs.dtype).kind in "fb" else slabs.dtype
     return {"shape": slabs.shape, "dtype": kind, "spacing": place.spacing, "origin": place.origin,
-            "unit": slabs.unit, "space": None}, with_names(table, merged_names(args, slabs.names, given))
+            "unit": slabs.unit, "space": getattr(slabs, "space", None)}, \
+        with_names(table, merged_names(args, slabs.names, given))
 
 
 #: a choice of more labels than this is read as a filter on the table of every label (:func:`chosen_rows`)

@@ -43,7 +43,10 @@ written to a file of its own into the large one without reading it.
 
 from __future__ import annotations
 
+import os
 import shutil
+from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -54,6 +57,7 @@ from ...errors import IsoflowError
 from ...scale.chunks import axis_names_given
 from .grid_attributes import READ, VOXEL_SIZES, attribute_grid, size_named
 from .registry import (
+    READ_HINT,
     RawVolume,
     check_shape,
     import_library,
@@ -61,6 +65,7 @@ from .registry import (
     names_json,
     note,
     reading,
+    split_dataset,
     stored_values,
     unit_field,
 )
@@ -79,27 +84,105 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     h5py = import_library("h5py", "HDF5")
     where = str(path) if dataset is None else f"{path}:{dataset}"
     with reading(path, "HDF5"), h5py.File(path, "r") as f:
-        chosen = _choose(f, h5py, path, dataset)
-        ds = f[chosen]
-        attrs = dict(ds.attrs)
-        # beside a volume placed by no attribute, a dataset that holds a voxel size is not read as its own
-        unplaced = "pitch" not in attrs and not any(name in attrs for name in VOXEL_SIZES)
-        beside = size_named((n for n in _datasets(f, h5py)[0] if n != chosen.strip("/")),
-                            attributes=False) if unplaced else []
-        stored = ds.shape
-        # the axes by their names: ilastik's axistags, else funlib's axis_names
-        index, kept = (tagged_axes(attrs["axistags"], stored, where) if "axistags" in attrs else
-                       axes_by_name(axis_names_given(attrs.get("axis_names"), len(stored)), stored, where, "axis_names"))
-        check_shape([stored[i] for i in kept], ds.dtype, where)
-        array = ds[index] if index else ds[()]
+        found = _opened(f, h5py, path, dataset, where)
+        check_shape(found.shape, found.dtype, where, hint=HINT)
+        ds = f[found.name]
+        array = ds[found.index] if found.index else ds[()]
     # the axes read are in stored order: turned to the order the tags give them (x, y, z, t)
-    array = np.transpose(array, [sorted(kept).index(i) for i in kept])
+    array = np.transpose(array, [sorted(found.kept).index(i) for i in found.kept])
+    return RawVolume(np.asarray(array), *found.placement, unit=found.unit, space=found.space, names=found.names)
+
+
+#: what a dataset too large to read whole can do instead
+HINT = f"{READ_HINT}; 'isoflow info FILE.h5:/DATASET --labels' reads an HDF5 dataset a slab at a time"
+
+
+def fits_whole(path: str | os.PathLike) -> bool:
+    """Whether ``FILE.h5`` (or ``FILE.h5:/DATASET``) is read whole for its
+    label table: it fits in memory as :func:`read` reads it, or it is not
+    3D (a 2D image and a time series are read whole, and refused there
+    where they do not fit); else its table is read a slab at a time
+    (:class:`LabelSlabs`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file, with its dataset where named.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> import tempfile, h5py
+    >>> from isoflow.scale.memory import budget_held
+    >>> path = Path(tempfile.mkdtemp()) / "seg.h5"
+    >>> with h5py.File(path, "w") as f:
+    ...     _ = f.create_dataset("seg", shape=(100, 100, 100), dtype=np.uint32)
+    >>> fits_whole(path)
+    True
+    >>> with budget_held(10**6):
+    ...     fits_whole(path)
+    False
+    """
+    from ...scale.memory import DoesNotFit
+
+    file, dataset = split_dataset(path)
+    h5py = import_library("h5py", "HDF5")
+    with reading(file, "HDF5"), h5py.File(file, "r") as f:
+        ds = f[_choose(f, h5py, file, dataset)]
+        stored, attrs = tuple(int(n) for n in ds.shape), ds.attrs
+        _, kept = named_axes(attrs, stored, str(path))
+        dtype = ds.dtype
+    if len(kept) != 3:
+        return True
+    try:
+        check_shape([stored[i] for i in kept], dtype, str(path))
+    except DoesNotFit:
+        return False
+    return True
+
+
+@dataclass(frozen=True)
+class _Dataset:
+    """An HDF5 dataset as isoflow reads it, before its values: its path in
+    the file, how to read it (``index``, ``kept``: :func:`axes_by_name`),
+    its shape in isoflow's order and type, stored shape and chunks, its
+    placement (``pitch, origin, offset, parity``), unit, frame and label
+    names."""
+
+    name: str
+    index: tuple
+    kept: list[int]
+    shape: tuple[int, ...]
+    dtype: np.dtype
+    stored: tuple[int, ...]
+    chunks: tuple[int, ...] | None
+    placement: tuple
+    unit: str | None
+    space: str | None
+    names: dict[int, str] | None
+
+
+def _opened(f, h5py, path: Path, dataset: str | None, where: str) -> _Dataset:
+    """The dataset ``read`` reads in the open file ``f``: chosen, its axes
+    by name, placed by its attributes (isoflow's, else another tool's:
+    :func:`~isoflow.mesh.formats.grid_attributes.attribute_grid`)."""
+    chosen = _choose(f, h5py, path, dataset)
+    ds = f[chosen]
+    attrs = dict(ds.attrs)
+    stored = tuple(int(n) for n in ds.shape)
+    index, kept = named_axes(attrs, stored, where)
+    # beside a volume placed by no attribute, a dataset that holds a voxel size is not read as its own
+    if "pitch" not in attrs and not any(name in attrs for name in VOXEL_SIZES):
+        beside = size_named((n for n in _datasets(f, h5py)[0] if n != chosen.strip("/")), attributes=False)
+        if beside:
+            note(f"{where}: {'the dataset' if len(beside) == 1 else 'the datasets'} "
+                 f"{', '.join('/' + n for n in beside)} beside it {'is' if len(beside) == 1 else 'are'} not read: "
+                 f"voxels of 1 (isoflow reads the voxel size from the dataset's attributes {READ})")
     # another tool's voxel size (ilastik's element_size_um, CREMI's resolution, ...), per stored axis
     grid = attribute_grid(attrs, stored, kept, where)
-    if beside:
-        note(f"{where}: {'the dataset' if len(beside) == 1 else 'the datasets'} {', '.join('/' + n for n in beside)} "
-             f"beside it {'is' if len(beside) == 1 else 'are'} not read: voxels of 1 (isoflow reads the voxel "
-             f"size from the dataset's attributes {READ})")
     if grid is None:  # isoflow's own attributes, or none
         pitch, origin, offset, unit = attrs.get("pitch", 1.0), attrs.get("origin"), attrs.get("offset"), None
     else:
@@ -110,8 +193,93 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         unit = unit_field(attrs["unit"], f"{where}: attribute 'unit'")
     names = names_from_json(attrs["label_names"], where, "attribute 'label_names'") if "label_names" in attrs else None
     space = space_given(str(attrs["space"]), f"{where}: attribute 'space'") if "space" in attrs else None
-    return RawVolume(np.asarray(array), pitch, origin, offset, attrs.get("parity", 0), unit=unit,
-                     space=space, names=names)
+    return _Dataset(chosen, index, kept, tuple(stored[i] for i in kept), ds.dtype, stored,
+                    None if ds.chunks is None else tuple(int(c) for c in ds.chunks),
+                    (pitch, origin, offset, attrs.get("parity", 0)), unit, space, names)
+
+
+class LabelSlabs:
+    """An HDF5 dataset's 3D label image read a slab at a time (h5py reads
+    any block of a dataset), as :class:`~isoflow.mesh.formats.omezarr.LabelSlabs`
+    reads a zarr store's, for a label table of an image that would not fit
+    in memory whole: ``shape`` and ``dtype`` in isoflow's (x, y, z) order,
+    ``slabs[x, y, z]`` the region of a slice per axis (one line naming the
+    file where a read fails); ``axes``, the order of x, y, z in which it
+    is read, along the axis of the most chunks (the stored first axis of
+    a contiguous dataset, whose layers lie one after another), and
+    ``layers`` its chunks' layers along ``axes[0]``; ``pitch`` and
+    ``origin`` (voxel (0, 0, 0)'s lowest corner in world units), ``unit``,
+    ``space`` (its anatomical frame, where it records one), ``names`` (its
+    labels' names, where it records them) and ``where``.
+
+    Examples
+    --------
+    >>> import tempfile, h5py
+    >>> path = Path(tempfile.mkdtemp()) / "seg.h5"
+    >>> with h5py.File(path, "w") as f:
+    ...     ds = f.create_dataset("seg", data=np.arange(60, dtype=np.uint16).reshape(3, 4, 5), chunks=(3, 2, 5))
+    ...     ds.attrs.update({"axis_names": ["z", "y", "x"], "resolution": [40.0, 4.0, 4.0]})
+    >>> slabs = LabelSlabs(path)
+    >>> slabs.shape, slabs.axes, slabs.layers, slabs.pitch.tolist()
+    ((5, 4, 3), (0, 1, 2), [5], [4.0, 4.0, 40.0])
+    >>> slabs[0:2, 0, 0].tolist() == [0, 1]
+    True
+    """
+
+    fill_value = None  # (HDF5 reads a chunk never written as the dataset's fill value, 0 unless set)
+
+    def __init__(self, path: str | os.PathLike) -> None:
+        from ...scale.chunks import layer_axes
+
+        self.path, dataset = split_dataset(path)
+        self.where = str(path)
+        h5py = import_library("h5py", "HDF5")
+        with reading(self.path, "HDF5"), h5py.File(self.path, "r") as f:
+            self.found = _opened(f, h5py, self.path, dataset, self.where)
+        found = self.found
+        if len(found.kept) != 3:
+            raise IsoflowError(f"{self.where}: a label table read a slab at a time needs a 3D volume, this dataset "
+                               f"is {len(found.kept)}D with shape {found.shape}")
+        try:
+            place = DigitalObject.placement(3, *found.placement)
+        except IsoflowError as exc:
+            raise exc.at(self.where) from None
+        self.pitch, self.origin = place.spacing, place.world(np.zeros((1, 3)))[0]
+        self.unit, self.space, self.names = found.unit, found.space, found.names
+        self.shape, self.dtype = found.shape, found.dtype
+        # a contiguous dataset's layers along its stored first axis lie one after another: one chunk per layer
+        sides = found.chunks or (1,) + found.stored[1:]
+        chunk = [int(sides[i]) for i in found.kept]
+        self.axes = layer_axes(tuple(-(-n // c) for n, c in zip(self.shape, chunk)))
+        along, side = self.shape[self.axes[0]], chunk[self.axes[0]]
+        self.layers = [side] * (along // side) + ([along % side] if along % side else [])
+
+    def __getitem__(self, region: object) -> np.ndarray:
+        parts = region if isinstance(region, tuple) else (region,)
+        index = list(self.found.index) or [slice(None)] * len(self.found.stored)
+        for n, axis in enumerate(self.found.kept):
+            index[axis] = parts[n] if n < len(parts) else slice(None)
+        h5py = import_library("h5py", "HDF5")
+        with reading(self.path, "HDF5"), h5py.File(self.path, "r") as f:
+            data = f[self.found.name][tuple(index)]
+        kept = [a for a, i in enumerate(index) if not isinstance(i, (int, np.integer))]
+        return np.transpose(data, [kept.index(a) for a in self.found.kept if a in kept])
+
+
+def named_axes(attrs: Mapping, stored: tuple[int, ...], where: str) -> tuple[tuple, list[int]]:
+    """How to read a dataset by its axes' names: ilastik's ``axistags``
+    (:func:`tagged_axes`), else funlib's ``axis_names``
+    (:func:`~isoflow.scale.chunks.axis_names_given`), else as stored
+    (:func:`axes_by_name`'s ``index`` and ``kept``).
+
+    Examples
+    --------
+    >>> named_axes({"axis_names": ["z", "y", "x"]}, (4, 5, 6), "a.h5")[1]
+    [2, 1, 0]
+    """
+    if "axistags" in attrs:
+        return tagged_axes(attrs["axistags"], stored, where)
+    return axes_by_name(axis_names_given(attrs.get("axis_names"), len(stored)), stored, where, "axis_names")
 
 
 def tagged_axes(tags: object, shape: tuple[int, ...], where: str) -> tuple[tuple, list[int]]:
