@@ -498,8 +498,7 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, g
     # a float store's labels are int64, as a float file's are read (read_labels): the same --json
     kind = label_dtype(slabs.dtype) if np.dtype(slabs.dtype).kind in "fb" else slabs.dtype
     return {"shape": slabs.shape, "dtype": kind, "spacing": place.spacing, "origin": place.origin,
-            "unit": slabs.unit, "space": getattr(slabs, "space", None)}, \
-        with_names(table, merged_names(args, slabs.names, given))
+            "unit": slabs.unit, "space": slabs.space}, with_names(table, merged_names(args, slabs.names, given))
 
 
 #: a choice of more labels than this is read as a filter on the table of every label (:func:`chosen_rows`)

@@ -80,16 +80,14 @@ class AttributeGrid:
     """Where another tool's attributes put a volume: ``pitch`` (one number,
     or one per axis read, in isoflow's order), ``origin`` (voxel 0's lowest
     corner in world units, or None where they give none), ``unit`` (their
-    length unit, or None), ``lattice_offset`` (whether an ``offset``
+    length unit, or None) and ``lattice_offset`` (whether an ``offset``
     attribute beside them is isoflow's count of voxels, for the reader
-    to take; False where it was read here, in world units, as ``origin``)
-    and ``named`` (the attributes read, for a refusal to name)."""
+    to take; False where it was read here, in world units, as ``origin``)."""
 
     pitch: float | np.ndarray
     origin: np.ndarray | None
     unit: str | None
     lattice_offset: bool
-    named: tuple[str, ...]
 
 
 def attribute_grid(attrs: Mapping[str, Any], shape: Sequence[int], axes: Sequence[int],
@@ -169,7 +167,7 @@ def attribute_grid(attrs: Mapping[str, Any], shape: Sequence[int], axes: Sequenc
         origin = None if origin is None else origin * factors
     if np.ndim(pitch) == 1 and np.all(pitch == pitch[0]):
         pitch = float(pitch[0])
-    return AttributeGrid(pitch, origin, unit, not world, named)
+    return AttributeGrid(pitch, origin, unit, not world)
 
 
 def _per_axis(value: Any, shape: Sequence[int], axes: Sequence[int], time: Any = None) -> Any:

@@ -954,7 +954,10 @@ class LabelSlabs:
     corner), ``unit`` their length unit (:func:`axis_unit`), ``fill_value``
     the array's (what zarr reads for a chunk never written), ``chunks``
     its chunks' sides in (x, y, z) order; ``names``
-    those of its labels where it records them (:func:`label_properties`)."""
+    those of its labels where it records them (:func:`label_properties`);
+    ``space`` None, as for every zarr store (no anatomical frame)."""
+
+    space = None
 
     def __init__(self, path):
         from ...scale.chunks import layer_axes, zarr_blocks
