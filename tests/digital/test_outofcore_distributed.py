@@ -145,6 +145,28 @@ def test_the_default_clients_worker_limit_holds_the_blocks():
     assert got["betti"] == [1, 0, 0] and got["voxels"] == np.count_nonzero(v)
 
 
+def test_the_workers_limit_is_read_while_the_client_refreshes_its_copy():
+    # a client's scheduler_info() asks the scheduler, then returns the client's own copy, which the client's
+    # periodic refresh (of totals, no worker) can replace in between: the cluster read as workerless and its limit
+    # went unchecked, a block too large for the worker run on it. With the refresh as often as it goes, every
+    # check still reads the one worker's limit and refuses what exceeds it
+    import dask
+
+    from isoflow.scale.memory import check_workers_fit, worker_room
+
+    unmonitored = {f"distributed.worker.memory.{k}": False for k in ("target", "spill", "pause", "terminate")}
+    with dask.config.set({**unmonitored, "distributed.client.scheduler-info-interval": "1ms"}), \
+            distributed.LocalCluster(n_workers=1, threads_per_worker=1, memory_limit="200MB", processes=False,
+                                     dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        rooms = {worker_room(client) for _ in range(300)}
+        refused = 0
+        for _ in range(300):
+            with pytest.raises(IsoflowError):
+                check_workers_fit(client, 10**9, "summing blocks")
+            refused += 1
+    assert rooms == {(200_000_000, 1)} and refused == 300
+
+
 def test_the_surface_blocks_are_held_to_the_workers_memory_limit(tmp_path):
     # the surface of a store written block by block on a default client's worker whose memory limit (50 MB) is
     # smaller than counting one block of 256^3 voxels takes (its voxels and halo as read, at least a byte each twice,

@@ -250,8 +250,8 @@ def worker_room(client) -> tuple[int, int] | None:
     Parameters
     ----------
     client : distributed.Client
-        The cluster's client (its ``scheduler_info()`` gives each worker's
-        ``memory_limit`` and ``nthreads``).
+        The cluster's client (its scheduler's ``identity`` gives each
+        worker's ``memory_limit`` and ``nthreads``).
 
     Returns
     -------
@@ -268,15 +268,33 @@ def worker_room(client) -> tuple[int, int] | None:
     >>> worker_room(Cluster())
     (150000000, 1)
     """
-    try:
-        workers = client.scheduler_info(n_workers=-1)["workers"].values()
-    except TypeError:  # a dask.distributed that lists every worker without being asked
-        workers = client.scheduler_info()["workers"].values()
-    rooms = [(int(w.get("memory_limit") or 0), max(int(w.get("nthreads") or 1), 1)) for w in workers]
+    rooms = [(int(w.get("memory_limit") or 0), max(int(w.get("nthreads") or 1), 1)) for w in _workers(client)]
     if not rooms or any(limit <= 0 for limit, _ in rooms):
         return None
     # the scheduler may give the largest tasks to the worker with the most memory per thread
     return max(rooms, key=lambda room: room[0] / room[1])
+
+
+def _workers(client) -> list[dict]:
+    """Each worker's record, as the scheduler says it now.
+
+    A client's ``scheduler_info()`` asks the scheduler and then returns the
+    client's cached copy, which the client's own refresh (every
+    ``distributed.client.scheduler-info-interval``, of totals and no
+    worker) may replace in between: the cluster then reads as having no
+    worker, and its memory limit goes unchecked. The scheduler's answer is
+    taken as it comes instead; an object with ``scheduler_info()`` alone
+    is asked that.
+    """
+    identity = getattr(getattr(client, "scheduler", None), "identity", None)
+    if identity is None:
+        info = client.scheduler_info(n_workers=-1)
+    else:
+        try:
+            info = client.sync(identity, n_workers=-1)
+        except TypeError:  # a dask.distributed whose scheduler lists every worker without being asked
+            info = client.sync(identity)
+    return list(info["workers"].values())
 
 
 def check_workers_fit(client, per_task: int, what: str, hint: str = "", held: int = 0) -> None:
@@ -289,8 +307,8 @@ def check_workers_fit(client, per_task: int, what: str, hint: str = "", held: in
     Parameters
     ----------
     client : distributed.Client
-        The cluster's client (its ``scheduler_info()`` gives each worker's
-        ``memory_limit`` and ``nthreads``).
+        The cluster's client (its scheduler's ``identity`` gives each
+        worker's ``memory_limit`` and ``nthreads``).
     per_task : int
         The bytes one task holds.
     what : str
