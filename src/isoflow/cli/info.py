@@ -12,7 +12,7 @@ import uuid
 from pathlib import Path
 
 from ..digital.report import Report
-from ..errors import IsoflowError, betti_words, coordinates, counted, path_text, terminal_text
+from ..errors import DoesNotFit, IsoflowError, betti_words, coordinates, counted, path_text, terminal_text
 from ..results import json_ready
 from .inputs import (
     add_connectivity,
@@ -28,7 +28,7 @@ from .inputs import (
     thread_count,
     why_empty,
 )
-from .labels import add_labels_option, refuse_names_without_labels
+from .labels import add_labels_option, in_hdf5_slabs, refuse_names_without_labels
 from .progress import progress_bar
 from .table_text import json_rows, measure_text
 
@@ -80,8 +80,20 @@ def cmd_info(args: argparse.Namespace) -> int:
     if split_dataset(args.input)[0].suffix.lower() == ".zarr" and stored_ndim(args.input, channel) in (2, 3):
         report = info_of_store(args)
         placed: dict | None = store_placement(args.input, report.unit, channel)
+    elif in_hdf5_slabs(args.input):
+        report, placed = info_of_dataset(args)
     else:
-        report, grid, placed = info_in_memory(args)
+        try:
+            report, grid, placed = info_in_memory(args)
+            whole = True
+        except DoesNotFit:
+            # an HDF5 volume read whole whose report would not fit beside it: read a block at a time instead,
+            # once the volume read is let go (the refusal's traceback holds it until this block ends)
+            if args.gpu or not hdf5_volume(args.input):
+                raise
+            whole = False
+        if not whole:
+            (report, placed), grid = info_of_dataset(args), None
     if args.json:
         print(report_json(report, {**(placed or {}), **({"voxelised": grid} if grid else {}),
                                    "input": path_text(args.input)}))
@@ -166,6 +178,43 @@ def info_of_store(args: argparse.Namespace) -> Report:
     with progress_bar(args, "blocks") as show, label_options(args):
         return analyze_store(args.input, args.connectivity, label=args.label, progress=show,
                              surfaces=not args.no_surfaces, threads=args.threads)
+
+
+def hdf5_volume(path: str) -> bool:
+    """Whether the input is an HDF5 file's 3D volume, which
+    :func:`info_of_dataset` reads a block at a time.
+
+    Examples
+    --------
+    >>> hdf5_volume("seg.nii.gz")  # no HDF5 file: not opened
+    False
+    """
+    from ..mesh.formats import hdf5
+    from ..mesh.formats.registry import format_for, split_dataset
+
+    file = split_dataset(path)[0]
+    fmt = format_for(file) if file.is_file() else None
+    return fmt is not None and fmt.name == "HDF5" and hdf5.is_3d(path)
+
+
+def info_of_dataset(args: argparse.Namespace) -> tuple[Report, dict]:
+    """An HDF5 dataset too large to read whole, a block at a time
+    (:func:`isoflow.mesh.formats.hdf5.analyze_dataset`): its report, and
+    its voxel size, origin and unit as :func:`calibration` gives them."""
+    from ..mesh.formats import hdf5
+
+    refuse_mesh_options(args, "HDF5")
+    refuse_points_option(args, "volume")
+    if args.gpu:
+        raise IsoflowError(f"{args.input}: --gpu takes volumes that fit in memory; this HDF5 dataset does not, and is "
+                           "read a block at a time on the host")
+    slabs = hdf5.LabelSlabs(args.input)
+    check_input_connectivity(args, 3)
+    say_plate(args, slabs.shape)
+    with progress_bar(args, "blocks") as show, label_options(args):
+        report = hdf5.analyze_dataset(args.input, args.connectivity, label=args.label, progress=show,
+                                      surfaces=not args.no_surfaces, threads=args.threads)
+    return report, calibration(slabs.place, slabs.unit, slabs.dtype)
 
 
 def info_in_memory(args: argparse.Namespace) -> tuple[Report, dict | None, dict | None]:

@@ -460,7 +460,9 @@ def in_hdf5_slabs(path: str) -> bool:
     from ..mesh.formats import hdf5
     from ..mesh.formats.registry import format_for, split_dataset
 
-    fmt = format_for(split_dataset(path)[0])
+    file = split_dataset(path)[0]
+    # a file that is not there (or a URL) is refused where every input is, in the same words
+    fmt = format_for(file) if file.is_file() else None
     return fmt is not None and fmt.name == "HDF5" and not hdf5.fits_whole(path)
 
 

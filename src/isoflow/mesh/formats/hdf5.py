@@ -43,9 +43,10 @@ written to a file of its own into the large one without reading it.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import shutil
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -53,16 +54,19 @@ import numpy as np
 
 from ...digital.frames import space_given
 from ...digital.lattice import DigitalObject
+from ...digital.report import Report
 from ...errors import IsoflowError
 from ...scale.chunks import axis_names_given
 from .grid_attributes import READ, VOXEL_SIZES, attribute_grid, size_named
 from .registry import (
     READ_HINT,
     RawVolume,
+    check_label,
     check_shape,
     import_library,
     names_from_json,
     names_json,
+    no_such_label,
     note,
     reading,
     split_dataset,
@@ -94,7 +98,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
 
 
 #: what a dataset too large to read whole can do instead
-HINT = f"{READ_HINT}; 'isoflow info FILE.h5:/DATASET --labels' reads an HDF5 dataset a slab at a time"
+HINT = f"{READ_HINT}; 'isoflow info FILE.h5:/DATASET' reads a 3D HDF5 volume a block at a time (--label N, --labels too)"
 
 
 def fits_whole(path: str | os.PathLike) -> bool:
@@ -128,20 +132,43 @@ def fits_whole(path: str | os.PathLike) -> bool:
     """
     from ...scale.memory import DoesNotFit
 
+    shape, dtype = _spatial(path)
+    if len(shape) != 3:
+        return True
+    try:
+        check_shape(shape, dtype, str(path))
+    except DoesNotFit:
+        return False
+    return True
+
+
+def is_3d(path: str | os.PathLike) -> bool:
+    """Whether ``FILE.h5`` (or ``FILE.h5:/DATASET``) holds a 3D volume
+    (its axes as :func:`read` takes them), which :func:`analyze_dataset`
+    reads a block at a time.
+
+    Examples
+    --------
+    >>> import tempfile, h5py
+    >>> path = Path(tempfile.mkdtemp()) / "seg.h5"
+    >>> with h5py.File(path, "w") as f:
+    ...     _ = f.create_dataset("seg", shape=(1, 5, 6, 7), dtype=np.uint8).attrs["axis_names"] = ["c^", "z", "y", "x"]
+    >>> is_3d(path)
+    True
+    """
+    return len(_spatial(path)[0]) == 3
+
+
+def _spatial(path: str | os.PathLike) -> tuple[list[int], np.dtype]:
+    """The shape of the dataset as :func:`read` takes its axes, and its
+    type, from its metadata alone."""
     file, dataset = split_dataset(path)
     h5py = import_library("h5py", "HDF5")
     with reading(file, "HDF5"), h5py.File(file, "r") as f:
         ds = f[_choose(f, h5py, file, dataset)]
-        stored, attrs = tuple(int(n) for n in ds.shape), ds.attrs
-        _, kept = named_axes(attrs, stored, str(path))
-        dtype = ds.dtype
-    if len(kept) != 3:
-        return True
-    try:
-        check_shape([stored[i] for i in kept], dtype, str(path))
-    except DoesNotFit:
-        return False
-    return True
+        stored = tuple(int(n) for n in ds.shape)
+        _, kept = named_axes(ds.attrs, stored, str(path))
+        return [stored[i] for i in kept], ds.dtype
 
 
 @dataclass(frozen=True)
@@ -244,12 +271,14 @@ class LabelSlabs:
             place = DigitalObject.placement(3, *found.placement)
         except IsoflowError as exc:
             raise exc.at(self.where) from None
+        self.place = dataclasses.replace(place, space=found.space)
         self.pitch, self.origin = place.spacing, place.world(np.zeros((1, 3)))[0]
         self.unit, self.space, self.names = found.unit, found.space, found.names
-        self.shape, self.dtype = found.shape, found.dtype
+        self.shape, self.dtype, self.ndim = found.shape, found.dtype, 3
         # a contiguous dataset's layers along its stored first axis lie one after another: one chunk per layer
         sides = found.chunks or (1,) + found.stored[1:]
-        chunk = [int(sides[i]) for i in found.kept]
+        self.chunks = tuple(int(sides[i]) for i in found.kept)
+        chunk = self.chunks
         self.axes = layer_axes(tuple(-(-n // c) for n, c in zip(self.shape, chunk)))
         along, side = self.shape[self.axes[0]], chunk[self.axes[0]]
         self.layers = [side] * (along // side) + ([along % side] if along % side else [])
@@ -264,6 +293,84 @@ class LabelSlabs:
             data = f[self.found.name][tuple(index)]
         kept = [a for a, i in enumerate(index) if not isinstance(i, (int, np.integer))]
         return np.transpose(data, [kept.index(a) for a in self.found.kept if a in kept])
+
+    def lazy(self):
+        """The image as a dask array in x, y, z order, a block of whole
+        chunks (grown where they would make too many blocks:
+        :func:`~isoflow.scale.chunks.zarr_blocks`) read as each is
+        needed."""
+        from ...scale.chunks import import_dask, zarr_blocks
+
+        _, da = import_dask()
+        return da.from_array(self, chunks=zarr_blocks(self, None), asarray=True, name=False)
+
+
+def analyze_dataset(path: str | os.PathLike, connectivity: int | None = None, label: object = None,
+                    progress: Callable[[int, int], object] | None = None, *, surfaces: bool = True,
+                    threads: int | None = None) -> Report:
+    """``isoflow info``'s report of an HDF5 dataset's 3D volume a block at a
+    time (:class:`LabelSlabs`, :func:`isoflow.digital.outofcore.analyze_chunked`),
+    for a volume that would not fit in memory whole: the report of the
+    same file read whole, placed as :func:`read` places it.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``FILE.h5`` or ``FILE.h5:/DATASET``.
+    connectivity : int, optional
+        6 or 26 (default 6).
+    label : number, optional
+        The value of the object's voxels in a label image; without it the
+        dataset holds 0 and 1 (or 0 and one other value, a mask written
+        0/255: that value's voxels).
+    progress : callable, optional
+        ``progress(done, total)``, as each block is summed and merged.
+    surfaces, threads
+        As :func:`~isoflow.digital.outofcore.analyze_chunked` takes them.
+
+    Returns
+    -------
+    Report
+
+    Raises
+    ------
+    IsoflowError
+        A dataset that is not 3D, a label image without ``label``, a
+        ``label`` that no voxel has (naming the values present).
+
+    Examples
+    --------
+    >>> import tempfile, h5py
+    >>> v = np.zeros((9, 8, 7), np.uint8); v[1:8, 1:7, 1:6] = 1; v[3:6, 3:5, :] = 0  # a tunnel along z
+    >>> path = Path(tempfile.mkdtemp()) / "m.h5"
+    >>> with h5py.File(path, "w") as f:
+    ...     _ = f.create_dataset("mask", data=v, chunks=(4, 3, 7))
+    >>> r = analyze_dataset(path, 6)
+    >>> r["betti"], r["voxels"] == int(v.sum())
+    ([1, 1, 0], True)
+    """
+    from ...digital.outofcore import analyze_in_xyz
+    from ...scale.arrays import NotBinary
+    from .omezarr import one_value_of_store
+
+    slabs = LabelSlabs(path)
+    lazy = slabs.lazy()
+    options = {"where": slabs.where, "progress": progress, "surfaces": surfaces, "threads": threads,
+               "pitch": slabs.pitch, "origin": slabs.origin, "unit": slabs.unit}
+    if label is None:
+        try:
+            report = analyze_in_xyz(lazy, [0, 1, 2], connectivity, **options)
+        except NotBinary as refused:
+            # a dataset of 0 and one other value is that value's mask, as read reads it
+            label = one_value_of_store(slabs, refused)
+            if label is None:
+                raise
+    if label is not None:
+        label = check_label(label, slabs.dtype, slabs.where)
+        report = analyze_in_xyz(lazy == label, [0, 1, 2], connectivity, **options)
+        if report.voxels == 0:
+            raise no_such_label(label, np.unique(lazy.map_blocks(np.unique).compute()), slabs.where)
+    return dataclasses.replace(report, parity=slabs.place.parity)
 
 
 def named_axes(attrs: Mapping, stored: tuple[int, ...], where: str) -> tuple[tuple, list[int]]:
