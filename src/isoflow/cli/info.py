@@ -28,7 +28,7 @@ from .inputs import (
     thread_count,
     why_empty,
 )
-from .labels import add_labels_option, in_hdf5_slabs, refuse_names_without_labels
+from .labels import add_labels_option, in_hdf5_slabs, is_hdf5, refuse_names_without_labels
 from .progress import progress_bar
 from .table_text import json_rows, measure_text
 
@@ -190,11 +190,8 @@ def hdf5_volume(path: str) -> bool:
     False
     """
     from ..mesh.formats import hdf5
-    from ..mesh.formats.registry import format_for, split_dataset
 
-    file = split_dataset(path)[0]
-    fmt = format_for(file) if file.is_file() else None
-    return fmt is not None and fmt.name == "HDF5" and hdf5.is_3d(path)
+    return is_hdf5(path) and hdf5.is_3d(path)
 
 
 def info_of_dataset(args: argparse.Namespace) -> tuple[Report, dict]:
@@ -212,7 +209,7 @@ def info_of_dataset(args: argparse.Namespace) -> tuple[Report, dict]:
     check_input_connectivity(args, 3)
     say_plate(args, slabs.shape)
     with progress_bar(args, "blocks") as show, label_options(args):
-        report = hdf5.analyze_dataset(args.input, args.connectivity, label=args.label, progress=show,
+        report = hdf5.analyze_dataset(slabs, args.connectivity, label=args.label, progress=show,
                                       surfaces=not args.no_surfaces, threads=args.threads)
     return report, calibration(slabs.place, slabs.unit, slabs.dtype)
 

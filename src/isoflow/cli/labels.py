@@ -458,12 +458,25 @@ def in_hdf5_slabs(path: str) -> bool:
     False
     """
     from ..mesh.formats import hdf5
+
+    return is_hdf5(path) and not hdf5.fits_whole(path)
+
+
+def is_hdf5(path: str) -> bool:
+    """Whether the input is an HDF5 file that is there (one that is not, or
+    a URL, is refused where every input is, in the same words), by its
+    suffix, without opening it.
+
+    Examples
+    --------
+    >>> is_hdf5("seg.nii.gz"), is_hdf5("absent.h5:/seg")
+    (False, False)
+    """
     from ..mesh.formats.registry import format_for, split_dataset
 
     file = split_dataset(path)[0]
-    # a file that is not there (or a URL) is refused where every input is, in the same words
     fmt = format_for(file) if file.is_file() else None
-    return fmt is not None and fmt.name == "HDF5" and not hdf5.fits_whole(path)
+    return fmt is not None and fmt.name == "HDF5"
 
 
 def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, given: dict[int, str] | None = None,

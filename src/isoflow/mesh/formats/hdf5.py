@@ -305,7 +305,7 @@ class LabelSlabs:
         return da.from_array(self, chunks=zarr_blocks(self, None), asarray=True, name=False)
 
 
-def analyze_dataset(path: str | os.PathLike, connectivity: int | None = None, label: object = None,
+def analyze_dataset(path: str | os.PathLike | LabelSlabs, connectivity: int | None = None, label: object = None,
                     progress: Callable[[int, int], object] | None = None, *, surfaces: bool = True,
                     threads: int | None = None) -> Report:
     """``isoflow info``'s report of an HDF5 dataset's 3D volume a block at a
@@ -315,8 +315,9 @@ def analyze_dataset(path: str | os.PathLike, connectivity: int | None = None, la
 
     Parameters
     ----------
-    path : str or os.PathLike
-        ``FILE.h5`` or ``FILE.h5:/DATASET``.
+    path : str, os.PathLike or LabelSlabs
+        ``FILE.h5`` or ``FILE.h5:/DATASET``, or its dataset opened (its
+        metadata read, and any warning about it said, once).
     connectivity : int, optional
         6 or 26 (default 6).
     label : number, optional
@@ -353,7 +354,7 @@ def analyze_dataset(path: str | os.PathLike, connectivity: int | None = None, la
     from ...scale.arrays import NotBinary
     from .omezarr import one_value_of_store
 
-    slabs = LabelSlabs(path)
+    slabs = path if isinstance(path, LabelSlabs) else LabelSlabs(path)
     lazy = slabs.lazy()
     options = {"where": slabs.where, "progress": progress, "surfaces": surfaces, "threads": threads,
                "pitch": slabs.pitch, "origin": slabs.origin, "unit": slabs.unit}
