@@ -23,7 +23,7 @@ from .inputs import (
     thread_count,
     why_empty,
 )
-from .labels import add_labels_option, refuse_names_without_labels
+from .labels import add_labels_option, in_hdf5_slabs, refuse_names_without_labels
 
 
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
@@ -78,6 +78,8 @@ def surface_of(args: argparse.Namespace) -> int:
         if streams(args):
             return cmd_surface_store(args)
         refuse_store_beyond_memory(args)
+    elif streams(args) and in_hdf5_slabs(args.input):  # (one that is not streamed is refused as read whole)
+        return cmd_surface_store(args)
     # both outputs checked before loading and before anything is written:
     # a bad --png must not leave the mesh behind
     out = check_output_path(args.output, args.force, suffixes=export.SURFACE_SUFFIXES, what="surface")
@@ -222,19 +224,25 @@ def is_store(name: str, label: float | None = None) -> bool:
 
 def cmd_surface_store(args: argparse.Namespace) -> int:
     """``surface STORE.zarr -o OUT.(ply|stl)``: the mesh written block by
-    block, then read back in chunks."""
+    block, then read back in chunks; of an HDF5 volume too large to read
+    whole likewise (:class:`~isoflow.mesh.formats.hdf5.LabelSlabs`)."""
     from ..digital.connectivity import default_connectivity
     from ..digital.lattice import DigitalObject
     from ..mesh.export import check_float64_corners
+    from ..mesh.formats import hdf5
     from ..mesh.formats.omezarr import label_absent, one_value_of_store, open_store, store_volume
     from ..mesh.surface_blocks import EmptySurface, write_surface_blocks
     from ..scale.arrays import NotBinary
     from .progress import progress_bar, reading_back
 
-    refuse_mesh_options(args, ".zarr")
+    dataset = None if is_store(args.input, args.label) else hdf5.LabelSlabs(args.input)
+    refuse_mesh_options(args, ".zarr" if dataset is None else "HDF5")
     refuse_points_option(args, "volume")
-    array, pitch, origin = store_volume(args.input, args.label)
-    frame = DigitalObject.placement(3, pitch=pitch, origin=origin)
+    if dataset is None:
+        array, pitch, origin = store_volume(args.input, args.label)
+        frame = DigitalObject.placement(3, pitch=pitch, origin=origin)
+    else:  # placed by its offset and parity too, as read places it
+        array, frame = dataset.reader(args.label), dataset.place
     # a placement no file holds: refused before any block
     corners = check_float64_corners(args.input, frame.origin, frame.spacing, array.shape)
     conn = args.connectivity or default_connectivity(3)
@@ -250,26 +258,29 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
                 written = write(array)
             except NotBinary as refused:
                 # a store of 0 and one other value is that value's mask, as read_volume reads it
-                value = None if args.label is not None else one_value_of_store(open_store(args.input), refused)
+                value = None if args.label is not None else one_value_of_store(
+                    open_store(args.input) if dataset is None else dataset, refused)
                 if value is None:
                     raise
-                array = store_volume(args.input, value)[0]
+                array = store_volume(args.input, value)[0] if dataset is None else dataset.reader(value)
                 written = write(array)
         except EmptySurface:
             if args.label is None:
                 raise
             # the label's voxels are none: say that no voxel has it and what
             # the store holds (as in memory), not "the object is empty"
-            raise label_absent(args.input, args.label) from None
+            raise (label_absent(args.input, args.label) if dataset is None else dataset.absent(args.label)) from None
     out = written["path"]
     # the file is in place from here: an interrupt before or during its check says so
     with reading_back(out, check=not args.no_check):
-        return report_store_written(args, array, frame, written, corners)
+        return report_store_written(args, array, frame, written, corners, zarr=dataset is None)
 
 
-def report_store_written(args: argparse.Namespace, array, frame, written: dict, corners: dict) -> int:
+def report_store_written(args: argparse.Namespace, array, frame, written: dict, corners: dict,
+                         zarr: bool = True) -> int:
     """The lines on a surface written block by block, and its read-back in
-    chunks (0, or 1 when the file does not read back as written)."""
+    chunks (0, or 1 when the file does not read back as written); of a
+    ``zarr`` store, a warning where chunks never written count."""
     from ..mesh.export import float64_move_note, stl_weld_note
     from ..mesh.float32 import float64_moved
     from ..mesh.formats.omezarr import open_store
@@ -278,7 +289,8 @@ def report_store_written(args: argparse.Namespace, array, frame, written: dict, 
     from ..scale.chunks import never_written, unwritten_fill
 
     out = written["path"]
-    never_written(str(args.input), unwritten_fill(open_store(args.input).array, args.label), args.label)
+    if zarr:
+        never_written(str(args.input), unwritten_fill(open_store(args.input).array, args.label), args.label)
     print(terminal_text(f"{out}: {written['vertices']} vertices, {written['faces']} faces ({written['kind']}), "
                         f"V-E+F = {written['euler_characteristic']}"
                         + (f", {pinched_words(written['pinched'])}; " if written["pinched"] else " (")

@@ -98,7 +98,8 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
 
 
 #: what a dataset too large to read whole can do instead
-HINT = f"{READ_HINT}; 'isoflow info FILE.h5:/DATASET' reads a 3D HDF5 volume a block at a time (--label N, --labels too)"
+HINT = (f"{READ_HINT}; 'isoflow info FILE.h5:/DATASET' (--label N, --labels too) and 'isoflow surface "
+        "FILE.h5:/DATASET -o OUT.ply' (or .stl) read a 3D HDF5 volume a block at a time")
 
 
 def fits_whole(path: str | os.PathLike) -> bool:
@@ -275,8 +276,9 @@ class LabelSlabs:
         self.pitch, self.origin = place.spacing, place.world(np.zeros((1, 3)))[0]
         self.unit, self.space, self.names = found.unit, found.space, found.names
         self.shape, self.dtype, self.ndim = found.shape, found.dtype, 3
-        # a contiguous dataset's layers along its stored first axis lie one after another: one chunk per layer
-        sides = found.chunks or (1,) + found.stored[1:]
+        # a contiguous dataset's layers along its stored first axis in space (after a channel's) lie one after
+        # another: one chunk per layer
+        sides = found.chunks or tuple(1 if i == min(found.kept) else n for i, n in enumerate(found.stored))
         self.chunks = tuple(int(sides[i]) for i in found.kept)
         chunk = self.chunks
         self.axes = layer_axes(tuple(-(-n // c) for n, c in zip(self.shape, chunk)))
@@ -294,15 +296,63 @@ class LabelSlabs:
         kept = [a for a, i in enumerate(index) if not isinstance(i, (int, np.integer))]
         return np.transpose(data, [kept.index(a) for a in self.found.kept if a in kept])
 
+    def reader(self, label: object = None):
+        """The volume as ``surface`` reads a store's a block at a time
+        (:class:`~isoflow.scale.chunkcache.ChunkReader`: decoded chunks
+        kept while they are needed), of the voxels equal to ``label``
+        where given (checked as :func:`read` checks it)."""
+        from ...scale.chunkcache import ChunkReader
+
+        return ChunkReader(self, label=None if label is None else check_label(label, self.dtype, self.where))
+
+    def absent(self, label: object) -> IsoflowError:
+        """The error for a ``label`` no voxel has, listing the values
+        present (read in a pass over the dataset), as :func:`read`'s
+        refuses it."""
+        from ...scale.chunks import import_dask
+
+        _, da = import_dask()
+        return no_such_label(label, np.unique(da.unique(self.lazy()).compute()), self.where)
+
     def lazy(self):
         """The image as a dask array in x, y, z order, a block of whole
         chunks (grown where they would make too many blocks:
-        :func:`~isoflow.scale.chunks.zarr_blocks`) read as each is
-        needed."""
+        :func:`~isoflow.scale.chunks.zarr_blocks`; of a contiguous dataset,
+        a slab of about :data:`~isoflow.scale.chunks.MIN_BLOCK` voxels of
+        its layers, one read) read as each is needed."""
         from ...scale.chunks import import_dask, zarr_blocks
 
         _, da = import_dask()
-        return da.from_array(self, chunks=zarr_blocks(self, None), asarray=True, name=False)
+        if self.found.chunks is None:
+            layered = self.found.kept.index(min(self.found.kept))
+            along, side = self.shape[layered], self._slab_layers(layered)
+            blocks = tuple((n,) if axis != layered else (side,) * (along // side) + ((along % side,) if along % side
+                                                                                      else ())
+                           for axis, n in enumerate(self.shape))
+        else:
+            blocks = zarr_blocks(self, None)
+        return da.from_array(self, chunks=blocks, asarray=True, name=False)
+
+    def _slab_layers(self, layered: int) -> int:
+        """The layers of a contiguous dataset a block takes: about
+        :data:`~isoflow.scale.chunks.MIN_BLOCK` voxels (a block of one
+        layer is read and summed at a cost of its own, thousands of times
+        over), halved while the blocks summed at a time would not fit in
+        memory (:func:`~isoflow.digital.outofcore.store_memory`)."""
+        from ...digital.outofcore import store_memory
+        from ...scale.chunks import MIN_BLOCK
+        from ...scale.compiled import thread_count
+        from ...scale.memory import default_budget
+
+        along = self.shape[layered]
+        rest = [n for axis, n in enumerate(self.shape) if axis != layered]
+        side = max(1, min(MIN_BLOCK // max(int(np.prod(rest)), 1), along))
+        while side > 1:
+            need = store_memory((side, *rest), (-(-along // side), 1, 1), self.dtype)
+            if thread_count() * need.block + need.faces + need.kept <= default_budget():
+                break
+            side //= 2
+        return side
 
 
 def analyze_dataset(path: str | os.PathLike | LabelSlabs, connectivity: int | None = None, label: object = None,
@@ -370,7 +420,7 @@ def analyze_dataset(path: str | os.PathLike | LabelSlabs, connectivity: int | No
         label = check_label(label, slabs.dtype, slabs.where)
         report = analyze_in_xyz(lazy == label, [0, 1, 2], connectivity, **options)
         if report.voxels == 0:
-            raise no_such_label(label, np.unique(lazy.map_blocks(np.unique).compute()), slabs.where)
+            raise slabs.absent(label)
     return dataclasses.replace(report, parity=slabs.place.parity)
 
 
