@@ -43,16 +43,18 @@ def report(capsys, *args) -> dict:
 
 def write(path, data, layout: str) -> None:
     with h5py.File(path, "w") as f:
-        chunks = {"contiguous": None, "odd chunks": (5, 7, 43), "funlib c^zyx": (1, 5, 7, 43)}[layout]
+        chunks = {"contiguous": None, "odd chunks": (5, 7, 43), "funlib c^zyx": (1, 5, 7, 43),
+                  "funlib c^zyx contiguous": None}[layout]
         ds = f.create_dataset("v", data=data[None] if layout.startswith("funlib") else data, chunks=chunks)
         ds.attrs["resolution"] = SIZE_ZYX
         ds.attrs["offset"] = OFFSET_ZYX
-        if layout.startswith("funlib"):
+        if layout.startswith("funlib"):  # a channel of one first: a contiguous dataset's layers are along z
             ds.attrs["axis_names"] = ["c^", "z", "y", "x"]
 
 
 @pytest.mark.parametrize("conn", [6, 26])
-@pytest.mark.parametrize("layout, values", [("contiguous", 255), ("odd chunks", 1), ("funlib c^zyx", 1)])
+@pytest.mark.parametrize("layout, values", [("contiguous", 255), ("odd chunks", 1), ("funlib c^zyx", 1),
+                                            ("funlib c^zyx contiguous", 1)])
 def test_a_mask_too_large_to_read_whole_is_read_a_block_at_a_time(tmp_path, capsys, layout, values, conn):
     from skimage.measure import euler_number, regionprops
 
