@@ -37,13 +37,15 @@ def table(capsys, *args) -> dict:
 
 
 @pytest.mark.parametrize("conn", [6, 26])
-@pytest.mark.parametrize("layout", ["contiguous", "odd chunks", "funlib c^zyx"])
+@pytest.mark.parametrize("layout", ["contiguous", "odd chunks", "funlib c^zyx", "funlib c^zyx contiguous"])
 def test_a_label_image_too_large_to_read_whole_is_read_in_slabs(tmp_path, capsys, layout, conn):
     stored = grains()
     path = tmp_path / "seg.h5"
     with h5py.File(path, "w") as f:
         data = stored[None] if layout.startswith("funlib") else stored
-        chunks = {"contiguous": None, "odd chunks": (5, 7, 91), "funlib c^zyx": (1, 9, 95, 13)}[layout]
+        # a contiguous dataset with a channel of one first is layered along z
+        chunks = {"contiguous": None, "odd chunks": (5, 7, 91), "funlib c^zyx": (1, 9, 95, 13),
+                  "funlib c^zyx contiguous": None}[layout]
         ds = f.create_dataset("seg", data=data, chunks=chunks)
         ds.attrs["resolution"] = SIZE_ZYX
         ds.attrs["offset"] = OFFSET_ZYX
