@@ -643,7 +643,9 @@ def one_value_of_store(store: StoreArray, refused: NotBinary) -> object | None:
     Parameters
     ----------
     store : StoreArray
-        The store, as :func:`open_store` opens it.
+        The store, as :func:`open_store` opens it (or an HDF5 dataset's
+        :class:`~isoflow.mesh.formats.hdf5.LabelSlabs`: what is read is
+        its ``lazy()`` array).
     refused : NotBinary
         The refusal of the block read: where that block holds more than one
         value other than 0 (its ``value`` is None) the store is no mask and
