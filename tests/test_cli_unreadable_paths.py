@@ -67,13 +67,13 @@ def shared_dir():
             p.chmod(0o755)
 
 
-@pytest.mark.parametrize("suffix", [".npy", ".nii.gz", ".txt"])
+@pytest.mark.parametrize("suffix", [".npy", ".nii.gz", ".txt", ".h5"])
 def test_an_input_name_too_long_is_one_line(tmp_path, capsys, suffix):
     line = one_line(capsys, "info", tmp_path / ("a" * 300 + suffix))
     assert os.strerror(errno.ENAMETOOLONG) in line, line
 
 
-@pytest.mark.parametrize("name", ["blob.npy", "blob.nii.gz", "blob.tif", "points.txt"])
+@pytest.mark.parametrize("name", ["blob.npy", "blob.nii.gz", "blob.tif", "points.txt", "blob.h5"])
 def test_an_input_without_read_permission_says_so(shared_dir, name):
     source = np.load(shared_dir / "blob.npy")
     if name == "points.txt":
@@ -91,6 +91,8 @@ def test_an_input_without_read_permission_says_so(shared_dir, name):
 
 @pytest.mark.parametrize("argv", [
     ["info", "closed/blob.npy"],
+    ["info", "closed/blob.h5"],  # (an HDF5 input is looked at first for its size: read whole, or by blocks)
+    ["surface", "closed/blob.h5", "-o", "s.ply"],
     ["flow", "closed/blob.npy", "--out", "run"],
     ["info", "blob.npy", "--labels", "--csv", "closed/t.csv"],
     ["surface", "blob.npy", "-o", "closed/s.ply"],

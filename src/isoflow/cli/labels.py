@@ -463,20 +463,26 @@ def in_hdf5_slabs(path: str) -> bool:
 
 
 def is_hdf5(path: str) -> bool:
-    """Whether the input is an HDF5 file that is there (one that is not, or
-    a URL, is refused where every input is, in the same words), by its
-    suffix, without opening it.
+    """Whether the input is an HDF5 file, by its suffix, that is there and
+    may be read (one that is not, a URL, a name too long, a folder closed
+    on the way, is refused where every input is, in the same words),
+    without opening it.
 
     Examples
     --------
-    >>> is_hdf5("seg.nii.gz"), is_hdf5("absent.h5:/seg")
-    (False, False)
+    >>> is_hdf5("seg.nii.gz"), is_hdf5("absent.h5:/seg"), is_hdf5("a" * 300 + ".h5")
+    (False, False, False)
     """
     from ..mesh.formats.registry import format_for, split_dataset
 
     file = split_dataset(path)[0]
-    fmt = format_for(file) if file.is_file() else None
-    return fmt is not None and fmt.name == "HDF5"
+    fmt = format_for(file)
+    if fmt is None or fmt.name != "HDF5":
+        return False
+    try:
+        return file.is_file() and os.access(file, os.R_OK)
+    except OSError:  # (is_file says False for a missing file, and raises for these)
+        return False
 
 
 def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, given: dict[int, str] | None = None,
