@@ -159,12 +159,10 @@ def test_the_workers_limit_is_read_while_the_client_refreshes_its_copy():
             distributed.LocalCluster(n_workers=1, threads_per_worker=1, memory_limit="200MB", processes=False,
                                      dashboard_address=None) as cluster, distributed.Client(cluster) as client:
         rooms = {worker_room(client) for _ in range(300)}
-        refused = 0
         for _ in range(300):
             with pytest.raises(IsoflowError):
                 check_workers_fit(client, 10**9, "summing blocks")
-            refused += 1
-    assert rooms == {(200_000_000, 1)} and refused == 300
+    assert rooms == {(200_000_000, 1)}
 
 
 def test_the_surface_blocks_are_held_to_the_workers_memory_limit(tmp_path):
