@@ -280,9 +280,8 @@ class LabelSlabs:
         # another: one chunk per layer
         sides = found.chunks or tuple(1 if i == min(found.kept) else n for i, n in enumerate(found.stored))
         self.chunks = tuple(int(sides[i]) for i in found.kept)
-        chunk = self.chunks
-        self.axes = layer_axes(tuple(-(-n // c) for n, c in zip(self.shape, chunk)))
-        along, side = self.shape[self.axes[0]], chunk[self.axes[0]]
+        self.axes = layer_axes(tuple(-(-n // c) for n, c in zip(self.shape, self.chunks)))
+        along, side = self.shape[self.axes[0]], self.chunks[self.axes[0]]
         self.layers = [side] * (along // side) + ([along % side] if along % side else [])
 
     def __getitem__(self, region: object) -> np.ndarray:
@@ -324,11 +323,9 @@ class LabelSlabs:
 
         _, da = import_dask()
         if self.found.chunks is None:
+            # a block's sides: dask cuts the image into regular blocks of them, the last shorter
             layered = self.found.kept.index(min(self.found.kept))
-            along, side = self.shape[layered], self._slab_layers(layered)
-            blocks = tuple((n,) if axis != layered else (side,) * (along // side) + ((along % side,) if along % side
-                                                                                      else ())
-                           for axis, n in enumerate(self.shape))
+            blocks = tuple(self._slab_layers(layered) if axis == layered else n for axis, n in enumerate(self.shape))
         else:
             blocks = zarr_blocks(self, None)
         return da.from_array(self, chunks=blocks, asarray=True, name=False)
