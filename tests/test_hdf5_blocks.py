@@ -99,12 +99,15 @@ def test_a_volume_read_whole_whose_report_would_not_fit_is_read_again_a_block_at
     assert blocks["euler_characteristic"] == euler_number(labels == 7, connectivity=SKIMAGE[conn])
 
 
-def test_the_surface_of_a_label_too_large_to_read_whole_is_written_a_block_at_a_time(tmp_path, capsys):
+@pytest.mark.parametrize("conn", [6, 26])
+def test_the_surface_of_a_label_too_large_to_read_whole_is_written_a_block_at_a_time(tmp_path, capsys, conn):
     # label 7 of a porous field and label 3 beside it, stored as funlib writes it (c^, z, y, x; a voxel size and a
     # world offset): the surface written block by block under a budget the whole read exceeds (3 bytes a voxel)
     # is the one written from the whole read, face for face, and trimesh reads back its volume as the voxels' and
-    # its box as the file places them; a label no voxel has is named with the values present; a surface that
-    # needs the whole mesh in memory (OBJ) is refused, naming the ways that read a block at a time
+    # its box as the file places them, pymeshlab a closed two-manifold of the genus of info's closed surfaces;
+    # a label no voxel has is named with the values present; a surface that needs the whole mesh in memory (OBJ)
+    # is refused, naming the ways that read a block at a time
+    import pymeshlab
     import trimesh
     from scipy.ndimage import gaussian_filter
 
@@ -114,9 +117,10 @@ def test_the_surface_of_a_label_too_large_to_read_whole_is_written_a_block_at_a_
     with h5py.File(path, "w") as f:
         ds = f.create_dataset("seg", data=labels[None], chunks=(1, 16, 16, 16))
         ds.attrs.update({"axis_names": ["c^", "z", "y", "x"], "resolution": SIZE_ZYX, "offset": OFFSET_ZYX})
-    assert main(["surface", str(path), "--label", "7", "-o", str(tmp_path / "whole.ply"), "--threads", "1"]) == 0
+    command = ["surface", str(path), "--label", "7", "--threads", "1", "--connectivity", str(conn)]
+    assert main([*command, "-o", str(tmp_path / "whole.ply")]) == 0
     with budget_held(int(labels.size * 2.9)):
-        assert main(["surface", str(path), "--label", "7", "-o", str(tmp_path / "blocks.ply"), "--threads", "1"]) == 0
+        assert main([*command, "-o", str(tmp_path / "blocks.ply")]) == 0
         fails(capsys, "surface", path, "--label", "5", "-o", tmp_path / "none.ply", "--threads", "1",
               words=("seg.h5: no voxel has label 5 (values present: 0, 3, 7)",))
         fails(capsys, "surface", path, "--label", "7", "-o", tmp_path / "m.obj",
@@ -128,3 +132,9 @@ def test_the_surface_of_a_label_too_large_to_read_whole_is_written_a_block_at_a_
     lo, hi = OFFSET_ZYX + zyx.min(0) * SIZE_ZYX, OFFSET_ZYX + (zyx.max(0) + 1) * SIZE_ZYX
     assert np.allclose(blocks.bounds, [lo[::-1], hi[::-1]])  # x, y, z: the stored z, y, x reversed
     assert not (tmp_path / "none.ply").exists() and not (tmp_path / "m.obj").exists()
+    surfaces = report(capsys, "info", path, "--label", 7, "--json", "--connectivity", conn)["surfaces"]
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(tmp_path / "blocks.ply"))
+    topo = ms.get_topological_measures()
+    assert topo["is_mesh_two_manifold"] and topo["boundary_edges"] == 0
+    assert topo["genus"] == sum(s["genus"] for s in surfaces)
